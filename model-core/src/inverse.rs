@@ -1,0 +1,890 @@
+//! The inverse problem: the tip load that explains measured cable lengths (MODEL.md "The inverse problem").
+//!
+//! Unknowns: the base strain `u(0)` (3) and `P` load parameters `p`, the tip load being
+//! `offset + B p` ([`LoadBasis`]: a free tip force, a force of unknown size along a known direction,
+//! ...). Residuals: the tip-moment condition `e` (3) and the cable-length mismatch `c(x) - c_meas`.
+//!
+//! Each iteration takes one sweep with six tangents (base strain and tip force), which gives the
+//! blocks `J_eu, J_ep, J_cu, J_cp`. The tip-moment condition is eliminated through `J_eu^-1` (the
+//! implicit function theorem: the shape follows the load), leaving the reduced least-squares problem
+//! in `p` alone:
+//!
+//! `c~ = (c - c_meas) - J_cu J_eu^-1 e`, `G = J_cp - J_cu J_eu^-1 J_ep`,
+//! `(G^T G / s^2 + mu diag) dp = -G^T c~ / s^2`, `du0 = -J_eu^-1 (e + J_ep dp)`,
+//!
+//! with `s` the measurement's standard deviation and a trust region on `|du0| L`. `G` is the
+//! sensitivity of the cable lengths to the load with the shape re-solved, so the same matrix gives
+//! the answer's quality: covariance `s^2 (G^T G)^-1`, singular values and condition number, and the
+//! implied force and tip-position uncertainty. Where the data cannot determine the load (an axial
+//! force, fewer cables than unknowns, a cable whose length saturates) the estimate says so.
+//!
+//! [`Estimator`] is the warm-started path for a control loop: it keeps the last answer and its
+//! Jacobian, takes quasi-Newton (Broyden) steps with plain sweeps, and refreshes the Jacobian only
+//! when a step fails or on a schedule.
+
+use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
+
+use crate::error::{ModelError, finite, finite_vec, positive};
+use crate::integrate::{Seed, Sweep, sweep};
+use crate::kinematics::Attitude;
+use crate::model::Model;
+use crate::report::{SolveReport, Termination};
+use crate::shooting::{ShootingSettings, Start, TipLoad, default_tolerance};
+use crate::stability::{Stability, classify};
+use crate::{MAX_CABLES, Scalar};
+
+/// Cable-length mismatches and other per-cable vectors, zero beyond the rod's cables.
+pub type CableVector<T> = SVector<T, MAX_CABLES>;
+
+/// The number of load parameters an estimate can have (1 to 3). The symmetric eigen-decomposition
+/// behind [`Quality`] needs a concrete size, so each is listed here.
+pub trait ParamCount<T: Scalar, const P: usize> {
+    /// Eigenvalues and eigenvectors (columns) of a symmetric `P x P` matrix, `None` if it does not converge.
+    fn symmetric_eigen(m: SMatrix<T, P, P>) -> Option<(SVector<T, P>, SMatrix<T, P, P>)>;
+}
+
+/// The marker implementing [`ParamCount`] for the supported sizes.
+#[derive(Clone, Copy, Debug)]
+pub struct Params;
+
+macro_rules! param_count {
+    ($($p:literal),*) => {$(
+        impl<T: Scalar> ParamCount<T, $p> for Params {
+            fn symmetric_eigen(m: SMatrix<T, $p, $p>) -> Option<(SVector<T, $p>, SMatrix<T, $p, $p>)> {
+                SymmetricEigen::try_new(m, T::default_epsilon(), 200).map(|e| (e.eigenvalues, e.eigenvectors))
+            }
+        }
+    )*};
+}
+param_count!(1, 2, 3);
+
+/// The tip load as a function of the unknown parameters: `offset + (force_n p, moment_nm p)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadBasis<T, const P: usize> {
+    /// The known part of the tip load.
+    pub offset: TipLoad<T>,
+    /// Tip force per unit parameter, N (global frame), one column per parameter.
+    pub force_n: SMatrix<T, 3, P>,
+    /// Tip moment per unit parameter, N m (global frame).
+    pub moment_nm: SMatrix<T, 3, P>,
+}
+
+impl<T: Scalar> LoadBasis<T, 3> {
+    /// An unknown tip force (three components, N, global frame): the product's estimator.
+    pub fn tip_force() -> Self {
+        Self {
+            offset: TipLoad::zero(),
+            force_n: Matrix3::identity(),
+            moment_nm: Matrix3::zeros(),
+        }
+    }
+}
+
+impl<T: Scalar> LoadBasis<T, 1> {
+    /// A tip force of unknown size (N) along a known direction, e.g. a mass hung at the tip
+    /// (direction = gravity): the thesis bench.
+    pub fn force_along(direction: &Vector3<T>) -> Result<Self, ModelError> {
+        finite_vec(direction, "load direction")?;
+        let norm = direction.norm();
+        positive(norm, "load direction")?;
+        Ok(Self {
+            offset: TipLoad::zero(),
+            force_n: SMatrix::<T, 3, 1>::from_column_slice((direction / norm).as_slice()),
+            moment_nm: SMatrix::zeros(),
+        })
+    }
+}
+
+impl<T: Scalar, const P: usize> LoadBasis<T, P> {
+    /// The tip load at parameters `p`.
+    pub fn load(&self, p: &SVector<T, P>) -> TipLoad<T> {
+        TipLoad {
+            force_n: self.offset.force_n + self.force_n * p,
+            moment_nm: self.offset.moment_nm + self.moment_nm * p,
+        }
+    }
+
+    fn validate(&self) -> Result<(), ModelError> {
+        self.offset.validate()?;
+        if !crate::scalar::all_finite(&self.force_n) || !crate::scalar::all_finite(&self.moment_nm) {
+            return Err(ModelError::NonFinite("load basis"));
+        }
+        Ok(())
+    }
+}
+
+/// Settings of the inverse solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InverseSettings<T> {
+    /// Iterations (each one sweep with six tangents).
+    pub max_iterations: u16,
+    /// Tolerance on the dimensionless tip-moment residual (as in [`ShootingSettings::tolerance`]).
+    pub tolerance: T,
+    /// Cable mismatch below which the fit is exact, m.
+    pub length_tolerance_m: T,
+    /// A step that moves the fit by less than this many standard deviations ends the solve.
+    pub step_tolerance_sigma: T,
+    /// Standard deviation of one cable-length measurement, m (for an encoder of resolution `q`,
+    /// `q / sqrt(12)`; see [`InverseSettings::with_resolution`]).
+    pub length_std_m: T,
+    /// A load component whose standard deviation exceeds this, N, makes the estimate
+    /// [`Determination::Weak`].
+    pub max_force_std_n: T,
+    /// Trust region: largest change of base strain per iteration, as an angle `|du0| L`, rad.
+    pub max_rotation_step_rad: T,
+    /// Check the stability of the answer (free: uses the tangents already computed).
+    pub check_stability: bool,
+}
+
+impl<T: Scalar> Default for InverseSettings<T> {
+    fn default() -> Self {
+        let eps = T::default_epsilon();
+        Self {
+            max_iterations: 40,
+            tolerance: default_tolerance(),
+            length_tolerance_m: (eps * T::lit(10.0)).max(T::lit(1e-12)),
+            step_tolerance_sigma: eps.sqrt(),
+            length_std_m: T::lit(1e-6),
+            max_force_std_n: T::lit(0.05),
+            max_rotation_step_rad: T::lit(1.0),
+            check_stability: true,
+        }
+    }
+}
+
+impl<T: Scalar> InverseSettings<T> {
+    /// Default settings for length measurements quantised at `resolution_m` (std `resolution / sqrt 12`).
+    pub fn with_resolution(resolution_m: T) -> Self {
+        Self {
+            length_std_m: resolution_m / T::lit(12.0).sqrt(),
+            ..Self::default()
+        }
+    }
+
+    fn validate(&self) -> Result<(), ModelError> {
+        positive(self.tolerance, "inverse tolerance")?;
+        positive(self.length_tolerance_m, "length tolerance")?;
+        positive(self.step_tolerance_sigma, "step tolerance")?;
+        positive(self.length_std_m, "length standard deviation")?;
+        positive(self.max_force_std_n, "force standard deviation limit")?;
+        positive(self.max_rotation_step_rad, "trust region")?;
+        Ok(())
+    }
+}
+
+/// How well the measurements determine the load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Determination {
+    /// Every load component's standard deviation is within [`InverseSettings::max_force_std_n`].
+    Determined,
+    /// Some direction of the load is poorly determined (its standard deviation exceeds the limit).
+    Weak,
+    /// The data cannot determine some direction at all (rank deficient: fewer independent cables
+    /// than unknowns).
+    Undetermined,
+    /// No load of the model explains the measurements within three standard deviations.
+    Inconsistent,
+}
+
+/// What the measurements say about the load, at the estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quality<T, const P: usize> {
+    /// Singular values of the weighted sensitivity `G / s` (per unit parameter), decreasing.
+    pub singular_values: SVector<T, P>,
+    /// Largest over smallest singular value (infinite when rank deficient).
+    pub condition_number: T,
+    /// Standard deviation of each parameter (infinite when undetermined).
+    pub param_std: SVector<T, P>,
+    /// Standard deviation of the tip force components, N, global frame.
+    pub force_std_n: Vector3<T>,
+    /// Standard deviation of the tip position components, m, global frame.
+    pub tip_std_m: Vector3<T>,
+    /// The parameter direction the data determine worst (unit vector).
+    pub weakest_direction: SVector<T, P>,
+    /// Rms of `(model - measured) / s` over the cables.
+    pub residual_rms_sigma: T,
+    /// The verdict.
+    pub determination: Determination,
+}
+
+/// An estimate of the tip load and the shape it implies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate<T, const P: usize> {
+    /// The load parameters.
+    pub params: SVector<T, P>,
+    /// The tip load they give.
+    pub load: TipLoad<T>,
+    /// The base strain of the equilibrium, 1/m.
+    pub base_strain_per_m: Vector3<T>,
+    /// Tip position, m.
+    pub tip_position_m: Vector3<T>,
+    /// Tip frame.
+    pub tip_rotation: Matrix3<T>,
+    /// Model minus measured cable length, m (zero beyond the rod's cables).
+    pub cable_residual_m: CableVector<T>,
+    /// How the solve went. Use the estimate only when `report.termination.is_success()`.
+    pub report: SolveReport<T>,
+    /// How well the data determine it.
+    pub quality: Quality<T, P>,
+}
+
+/// The linearisation of the residuals at one point.
+#[derive(Clone, Copy, Debug)]
+struct Linearization<T, const P: usize> {
+    e: Vector3<T>,
+    rc: CableVector<T>,
+    j_eu: Matrix3<T>,
+    j_ep: SMatrix<T, 3, P>,
+    j_cu: SMatrix<T, MAX_CABLES, 3>,
+    j_cp: SMatrix<T, MAX_CABLES, P>,
+    tip_position_m: Vector3<T>,
+    tip_rotation: Matrix3<T>,
+    d_tip_u: Matrix3<T>,
+    d_tip_p: SMatrix<T, 3, P>,
+    d_theta_tip_u: Matrix3<T>,
+    conjugate_point_m: Option<T>,
+}
+
+impl<T: Scalar, const P: usize> Linearization<T, P> {
+    fn empty() -> Self {
+        Self {
+            e: Vector3::zeros(),
+            rc: CableVector::zeros(),
+            j_eu: Matrix3::identity(),
+            j_ep: SMatrix::zeros(),
+            j_cu: SMatrix::zeros(),
+            j_cp: SMatrix::zeros(),
+            tip_position_m: Vector3::zeros(),
+            tip_rotation: Matrix3::identity(),
+            d_tip_u: Matrix3::zeros(),
+            d_tip_p: SMatrix::zeros(),
+            d_theta_tip_u: Matrix3::identity(),
+            conjugate_point_m: None,
+        }
+    }
+
+    /// New residuals and tip pose from a plain sweep; the Jacobian blocks stay.
+    fn set_residual(&mut self, sw: &Sweep<T, 0>, rc: CableVector<T>) {
+        self.e = sw.moment_residual_nm;
+        self.rc = rc;
+        self.tip_position_m = sw.tip_position_m;
+        self.tip_rotation = sw.tip_rotation;
+    }
+}
+
+/// The reduced Gauss-Newton system at a linearisation.
+struct Reduced<T, const P: usize> {
+    /// `J_eu^-1 J_ep`.
+    a: SMatrix<T, 3, P>,
+    /// `J_eu^-1 e`.
+    b: Vector3<T>,
+    /// Weighted sensitivity `G / s`.
+    g: SMatrix<T, MAX_CABLES, P>,
+    /// Weighted reduced residual `c~ / s`.
+    c: CableVector<T>,
+}
+
+/// The state the solve moves: base strain and load parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Point<T, const P: usize> {
+    u0: Vector3<T>,
+    p: SVector<T, P>,
+}
+
+struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize> {
+    model: &'a Model<T, A>,
+    basis: LoadBasis<T, P>,
+    measured: CableVector<T>,
+    settings: InverseSettings<T>,
+    cables: usize,
+    /// Largest cable offset, m: a tip-moment error of angle `a` changes a cable length by about `a r`.
+    radius_m: T,
+}
+
+impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
+    fn full_sweep(&self, x: &Point<T, P>) -> Sweep<T, 6> {
+        let load = self.basis.load(&x.p);
+        sweep::<T, A, 6>(
+            self.model,
+            &self.model.inputs(&x.u0, &load, T::one()),
+            &Seed::all(),
+            self.settings.check_stability,
+            None,
+        )
+    }
+
+    fn plain_sweep(&self, x: &Point<T, P>) -> Sweep<T, 0> {
+        let load = self.basis.load(&x.p);
+        sweep::<T, A, 0>(self.model, &self.model.inputs(&x.u0, &load, T::one()), &[], false, None)
+    }
+
+    fn cable_residual<const K: usize>(&self, sw: &Sweep<T, K>) -> CableVector<T> {
+        CableVector::from_fn(|c, _| match (c < self.cables, sw.cable_m.get(c), self.measured.get(c)) {
+            (true, Some(model), Some(measured)) => *model - *measured,
+            _ => T::zero(),
+        })
+    }
+
+    fn linearize(&self, x: &Point<T, P>, sw: &Sweep<T, 6>) -> Linearization<T, P> {
+        let col = |j: usize| sw.d_moment_residual.get(j).copied().unwrap_or_else(Vector3::zeros);
+        let j_eu = Matrix3::from_columns(&[col(0), col(1), col(2)]);
+        let j_ef = Matrix3::from_columns(&[col(3), col(4), col(5)]);
+        // e = C u - R^T tau: d e / d tau = -R^T.
+        let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
+        let cable = |c: usize, j: usize| {
+            if c < self.cables {
+                sw.d_cable.get(c).and_then(|row| row.get(j)).copied().unwrap_or_else(T::zero)
+            } else {
+                T::zero()
+            }
+        };
+        let j_cu = SMatrix::<T, MAX_CABLES, 3>::from_fn(&cable);
+        let j_cf = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, j + 3));
+        let tip = |j: usize| sw.d_tip_position.get(j).copied().unwrap_or_else(Vector3::zeros);
+        let theta = |j: usize| sw.d_tip_rotation.get(j).copied().unwrap_or_else(Vector3::zeros);
+        let _ = x;
+        Linearization {
+            e: sw.moment_residual_nm,
+            rc: self.cable_residual(sw),
+            j_eu,
+            j_ep,
+            j_cu,
+            j_cp: j_cf * self.basis.force_n,
+            tip_position_m: sw.tip_position_m,
+            tip_rotation: sw.tip_rotation,
+            d_tip_u: Matrix3::from_columns(&[tip(0), tip(1), tip(2)]),
+            d_tip_p: Matrix3::from_columns(&[tip(3), tip(4), tip(5)]) * self.basis.force_n,
+            d_theta_tip_u: Matrix3::from_columns(&[theta(0), theta(1), theta(2)]),
+            conjugate_point_m: sw.conjugate_point_m,
+        }
+    }
+
+    fn reduce(&self, lin: &Linearization<T, P>) -> Option<Reduced<T, P>> {
+        let lu = lin.j_eu.lu();
+        let a = lu.solve(&lin.j_ep)?;
+        let b = lu.solve(&lin.e)?;
+        let inv_std = T::one() / self.settings.length_std_m;
+        let g = (lin.j_cp - lin.j_cu * a) * inv_std;
+        let c = (lin.rc - lin.j_cu * b) * inv_std;
+        let ok = crate::scalar::all_finite(&g) && crate::scalar::all_finite(&c) && crate::scalar::all_finite(&a);
+        ok.then_some(Reduced { a, b, g, c })
+    }
+
+    /// The merit the step must decrease: squared cable mismatch in standard deviations, plus the
+    /// tip-moment error converted to the cable-length change it would cause.
+    fn merit(&self, e: &Vector3<T>, rc: &CableVector<T>) -> T {
+        let moment_as_length = self.model.moment_residual(e) * self.radius_m / self.settings.length_std_m;
+        rc.norm_squared() / (self.settings.length_std_m * self.settings.length_std_m) + moment_as_length * moment_as_length
+    }
+
+    /// The damped reduced step, limited by the trust region.
+    fn step(&self, red: &Reduced<T, P>, mu: T) -> Option<(Vector3<T>, SVector<T, P>)> {
+        let normal = red.g.tr_mul(&red.g);
+        let gradient = red.g.tr_mul(&red.c);
+        // A tiny ridge keeps an undetermined direction from blowing the step up; LM damping on top.
+        let ridge = normal.diagonal().max().max(T::one()) * T::default_epsilon() * T::lit(16.0);
+        let damped = normal + SMatrix::from_diagonal(&(normal.diagonal() * mu).add_scalar(ridge));
+        let dp = damped.cholesky()?.solve(&-gradient);
+        let mut du = -(red.b + red.a * dp);
+        let mut dp = dp;
+        let norm = du.norm() * self.model.length_m();
+        if norm > self.settings.max_rotation_step_rad {
+            let scale = self.settings.max_rotation_step_rad / norm;
+            du *= scale;
+            dp *= scale;
+        }
+        let finite = crate::scalar::all_finite(&du) && crate::scalar::all_finite(&dp);
+        finite.then_some((du, dp))
+    }
+
+    /// The fit's quality from the reduced system.
+    fn quality(&self, lin: &Linearization<T, P>, red: Option<&Reduced<T, P>>) -> Quality<T, P>
+    where
+        Params: ParamCount<T, P>,
+    {
+        let inv_std = T::one() / self.settings.length_std_m;
+        let residual_rms_sigma = if self.cables > 0 {
+            (lin.rc.norm_squared() / T::lit(self.cables as f64)).sqrt() * inv_std
+        } else {
+            T::zero()
+        };
+        let infinite: T = T::max_value().unwrap_or_else(|| T::lit(1e300));
+        let mut quality: Quality<T, P> = Quality {
+            singular_values: SVector::zeros(),
+            condition_number: infinite,
+            param_std: SVector::repeat(infinite),
+            force_std_n: Vector3::repeat(infinite),
+            tip_std_m: Vector3::repeat(infinite),
+            weakest_direction: SVector::zeros(),
+            residual_rms_sigma,
+            determination: Determination::Undetermined,
+        };
+        let Some(red) = red else {
+            return quality;
+        };
+        let normal = red.g.tr_mul(&red.g);
+        let Some((eigenvalues, eigenvectors)) = Params::symmetric_eigen(normal) else {
+            return quality;
+        };
+        let (mut largest, mut smallest, mut weakest) = (T::zero(), infinite, 0usize);
+        for (i, &value) in eigenvalues.iter().enumerate() {
+            let value = value.max(T::zero());
+            largest = largest.max(value);
+            if value < smallest {
+                (smallest, weakest) = (value, i);
+            }
+        }
+        let mut sorted: SVector<T, P> = eigenvalues.map(|v| v.max(T::zero()).sqrt());
+        sorted.as_mut_slice().sort_unstable_by(|a, b| b.partial_cmp(a).unwrap_or(core::cmp::Ordering::Equal));
+        quality.singular_values = sorted;
+        quality.weakest_direction = eigenvectors.column(weakest).into_owned();
+        let rank_deficient = smallest <= largest * T::default_epsilon() * T::lit(1e3) || largest == T::zero();
+        if rank_deficient {
+            return quality;
+        }
+        quality.condition_number = (largest / smallest).sqrt();
+        // Covariance of p: (G^T G / s^2)^-1 = V diag(1/lambda) V^T.
+        let covariance = eigenvectors
+            * SMatrix::<T, P, P>::from_diagonal(&eigenvalues.map(|v| T::one() / v))
+            * eigenvectors.transpose();
+        quality.param_std = covariance.diagonal().map(|v| v.max(T::zero()).sqrt());
+        let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
+        quality.force_std_n = force_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
+        let d_tip = lin.d_tip_p - lin.d_tip_u * red.a;
+        let tip_cov = d_tip * covariance * d_tip.transpose();
+        quality.tip_std_m = tip_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        let moment_cov = self.basis.moment_nm * covariance * self.basis.moment_nm.transpose();
+        let worst = quality.force_std_n.max().max(moment_cov.diagonal().max().max(T::zero()).sqrt());
+        quality.determination = if residual_rms_sigma > T::lit(3.0) {
+            Determination::Inconsistent
+        } else if worst > self.settings.max_force_std_n {
+            Determination::Weak
+        } else {
+            Determination::Determined
+        };
+        quality
+    }
+
+    /// The smallest fit change, in standard deviations, the scalar type can resolve: cable lengths are
+    /// sums of chords about as long as the rod, so their rounding is a few `eps L`.
+    fn fit_floor_sigma(&self) -> T {
+        T::default_epsilon() * T::lit(16.0) * self.model.length_m() / self.settings.length_std_m
+    }
+
+    fn converged(&self, lin: &Linearization<T, P>, step: Option<&(Vector3<T>, SVector<T, P>)>, red: &Reduced<T, P>) -> bool {
+        if self.model.moment_residual(&lin.e) > self.settings.tolerance {
+            return false;
+        }
+        if lin.rc.amax() <= self.settings.length_tolerance_m {
+            return true;
+        }
+        let tolerance = self.settings.step_tolerance_sigma.max(self.fit_floor_sigma());
+        step.is_some_and(|(_, dp)| (red.g * dp).norm() <= tolerance)
+    }
+}
+
+/// Where an inverse solve starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InverseStart<T, const P: usize> {
+    /// From load parameters (the shape is solved cold for them first).
+    Params(SVector<T, P>),
+    /// From a previous estimate's parameters and base strain.
+    Warm {
+        /// Load parameters.
+        params: SVector<T, P>,
+        /// Base strain, 1/m.
+        base_strain_per_m: Vector3<T>,
+    },
+}
+
+fn validate_measurements<T: Scalar, A: Attitude<T>>(
+    model: &Model<T, A>,
+    measured_m: &[T],
+) -> Result<CableVector<T>, ModelError> {
+    let rod = model.rod();
+    if measured_m.len() != rod.cables.len() {
+        return Err(ModelError::Mismatch("measured cable lengths and cables"));
+    }
+    if measured_m.is_empty() {
+        return Err(ModelError::Empty("cable lengths"));
+    }
+    let mut out = CableVector::zeros();
+    for (c, (&length, cable)) in measured_m.iter().zip(rod.cables.iter()).enumerate() {
+        positive(length, "cable length")?;
+        if length > cable_length_bound_m(rod, cable) {
+            return Err(ModelError::OutOfRange("cable length (longer than the rod can produce)"));
+        }
+        if let Some(slot) = out.get_mut(c) {
+            *slot = length;
+        }
+    }
+    Ok(out)
+}
+
+/// An upper bound on a cable's length: every chord between consecutive holes is at most the arc
+/// between them stretched by 10 % plus twice the hole offset.
+pub fn cable_length_bound_m<T: Scalar>(rod: &crate::Rod<T>, cable: &crate::Cable<T>) -> T {
+    let mut previous: Option<T> = None;
+    let mut bound = T::zero();
+    let holes = rod.guides.iter().map(|g| g.s_m).filter(|s| *s <= cable.end_m).chain(core::iter::once(cable.end_m));
+    for s in holes {
+        if let Some(prev) = previous {
+            bound += (s - prev) * T::lit(1.1) + cable.radius_m * T::lit(2.0);
+        }
+        previous = Some(s);
+    }
+    bound
+}
+
+/// Estimates the load parameters from measured cable lengths (one per cable, m), starting from `start`.
+///
+/// Fails only on invalid input. The answer is usable when `report.termination.is_success()`; how
+/// well the data determine it is in `quality`.
+pub fn estimate<T: Scalar, A: Attitude<T>, const P: usize>(
+    model: &Model<T, A>,
+    basis: &LoadBasis<T, P>,
+    measured_m: &[T],
+    start: InverseStart<T, P>,
+    settings: &InverseSettings<T>,
+) -> Result<Estimate<T, P>, ModelError>
+where
+    Params: ParamCount<T, P>,
+{
+    basis.validate()?;
+    settings.validate()?;
+    let measured = validate_measurements(model, measured_m)?;
+    let problem = Problem {
+        model,
+        basis: *basis,
+        measured,
+        settings: *settings,
+        cables: model.rod().cables.len(),
+        radius_m: model.rod().cables.iter().fold(T::zero(), |r, c| r.max(c.radius_m)),
+    };
+    let mut work = crate::shooting::Work::default();
+    let x = match start {
+        InverseStart::Params(p) => {
+            for v in p.iter() {
+                finite(*v, "start parameters")?;
+            }
+            let shooting = ShootingSettings {
+                tolerance: settings.tolerance,
+                max_rotation_step_rad: settings.max_rotation_step_rad,
+                ..ShootingSettings::default()
+            };
+            let eq = model.solve(&basis.load(&p), Start::Cold, &shooting)?;
+            work.iterations = eq.report.iterations;
+            work.sweeps = eq.report.sweeps;
+            if !eq.report.termination.is_success() {
+                let lin = problem.linearize(&Point { u0: eq.base_strain_per_m, p }, &problem.full_sweep(&Point { u0: eq.base_strain_per_m, p }));
+                return Ok(problem.finish(Point { u0: eq.base_strain_per_m, p }, &lin, eq.report.termination, work));
+            }
+            Point { u0: eq.base_strain_per_m, p }
+        }
+        InverseStart::Warm { params, base_strain_per_m } => {
+            finite_vec(&base_strain_per_m, "warm-start base strain")?;
+            for v in params.iter() {
+                finite(*v, "start parameters")?;
+            }
+            Point { u0: base_strain_per_m, p: params }
+        }
+    };
+    Ok(problem.solve(x, work))
+}
+
+impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P>
+where
+    Params: ParamCount<T, P>,
+{
+    fn solve(&self, mut x: Point<T, P>, mut work: crate::shooting::Work) -> Estimate<T, P> {
+        work.sweeps = work.sweeps.saturating_add(1);
+        let sw = self.full_sweep(&x);
+        if !sw.finite {
+            let lin = self.linearize(&x, &sw);
+            return self.finish(x, &lin, Termination::NonFinite, work);
+        }
+        let mut lin = self.linearize(&x, &sw);
+        let mut merit = self.merit(&lin.e, &lin.rc);
+        let mut mu = T::zero();
+        let mut rejections = 0u8;
+        for _ in 0..self.settings.max_iterations {
+            let Some(red) = self.reduce(&lin) else {
+                return self.finish(x, &lin, Termination::Singular, work);
+            };
+            let step = self.step(&red, mu);
+            if self.converged(&lin, step.as_ref(), &red) {
+                return self.finish(x, &lin, Termination::Converged, work);
+            }
+            let Some((du, dp)) = step else {
+                return self.finish(x, &lin, Termination::Singular, work);
+            };
+            work.iterations = work.iterations.saturating_add(1);
+            let trial = Point { u0: x.u0 + du, p: x.p + dp };
+            work.sweeps = work.sweeps.saturating_add(1);
+            let sw = self.full_sweep(&trial);
+            let trial_lin = sw.finite.then(|| self.linearize(&trial, &sw));
+            let trial_merit = trial_lin.as_ref().map(|l| self.merit(&l.e, &l.rc));
+            match (trial_lin, trial_merit) {
+                (Some(l), Some(m)) if m < merit => {
+                    (x, lin, merit) = (trial, l, m);
+                    mu *= T::lit(0.25);
+                    if mu < T::lit(1e-6) {
+                        mu = T::zero();
+                    }
+                    rejections = 0;
+                }
+                _ => {
+                    mu = if mu == T::zero() { T::lit(1e-3) } else { mu * T::lit(8.0) };
+                    rejections += 1;
+                    if rejections >= 8 {
+                        return self.finish(x, &lin, Termination::Stalled, work);
+                    }
+                }
+            }
+        }
+        let red = self.reduce(&lin);
+        let step = red.as_ref().and_then(|r| self.step(r, T::zero()));
+        let done = red.as_ref().is_some_and(|r| self.converged(&lin, step.as_ref(), r));
+        let termination = if done { Termination::Converged } else { Termination::IterationLimit };
+        self.finish(x, &lin, termination, work)
+    }
+
+    fn finish(&self, x: Point<T, P>, lin: &Linearization<T, P>, termination: Termination, work: crate::shooting::Work) -> Estimate<T, P> {
+        let red = self.reduce(lin);
+        let quality = self.quality(lin, red.as_ref());
+        let mut termination = termination;
+        let stability = if termination.is_success() && self.settings.check_stability {
+            let conservative = self.model.conservative(&self.basis.load(&x.p).moment_nm);
+            let verdict = classify(conservative, lin.conjugate_point_m, &lin.j_eu, &lin.d_theta_tip_u, self.model.length_m());
+            if !verdict.is_acceptable() {
+                termination = Termination::Unstable;
+            }
+            verdict
+        } else {
+            Stability::Unchecked
+        };
+        let moment = self.model.moment_residual(&lin.e);
+        let cables = if self.cables > 0 { T::lit(self.cables as f64) } else { T::one() };
+        let length_residual = (lin.rc.norm_squared() / cables).sqrt() / self.model.length_m();
+        Estimate {
+            params: x.p,
+            load: self.basis.load(&x.p),
+            base_strain_per_m: x.u0,
+            tip_position_m: lin.tip_position_m,
+            tip_rotation: lin.tip_rotation,
+            cable_residual_m: lin.rc,
+            report: SolveReport {
+                termination,
+                iterations: work.iterations,
+                sweeps: work.sweeps,
+                residual: moment.max(length_residual),
+                load_steps: 0,
+                stability,
+            },
+            quality,
+        }
+    }
+}
+
+/// Settings of the warm-started [`Estimator`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EstimatorSettings<T> {
+    /// The inverse solve's settings (measurement noise, trust region; its tolerances apply to the
+    /// first, cold estimate).
+    pub inverse: InverseSettings<T>,
+    /// Most sweeps one update may take (its cost bound). The first is a plain sweep; the others carry
+    /// six tangents and cost about 2.2 plain sweeps each.
+    pub max_sweeps: u8,
+    /// An update has converged when the next step would move the tip by less than this, m, and the
+    /// fit by less than `fit_tolerance_sigma` standard deviations. Raised to what the scalar type
+    /// resolves (`4 L` times the default shooting tolerance: 37 um for f32 on a 39 cm rod).
+    pub tip_tolerance_m: T,
+    /// See `tip_tolerance_m`. Raised to what the scalar type can resolve (a few `eps L` of cable
+    /// length: about 0.3 standard deviations for f32 and a 2 um standard deviation).
+    pub fit_tolerance_sigma: T,
+}
+
+impl<T: Scalar> Default for EstimatorSettings<T> {
+    /// A control loop needs the answer to a fraction of the measurement noise, not to rounding: an
+    /// update stops when the next step would move the tip by less than 10 um and the fit by less
+    /// than 0.01 standard deviations.
+    fn default() -> Self {
+        Self::with_inverse(InverseSettings::default())
+    }
+}
+
+impl<T: Scalar> EstimatorSettings<T> {
+    /// Control-loop tolerances (see [`Default`]) on top of the given inverse settings.
+    pub fn with_inverse(inverse: InverseSettings<T>) -> Self {
+        Self {
+            inverse,
+            max_sweeps: 3,
+            tip_tolerance_m: T::lit(1e-5),
+            fit_tolerance_sigma: T::lit(1e-2),
+        }
+    }
+}
+
+/// The warm-started inverse for a control loop.
+///
+/// Each [`Estimator::update`] starts from the last estimate: a plain sweep gives the residual for
+/// the new measurements, a step with the Jacobian kept from the last update (a chord step) moves
+/// toward them, and the sweep at the trial point carries the six tangents, so an accepted point
+/// brings its own exact Jacobian: Newton from the second step on, and a fresh Jacobian for the next
+/// update. The cost is bounded by [`EstimatorSettings::max_sweeps`]; when the budget runs out the
+/// report says [`Termination::IterationLimit`] and the next update carries on from there.
+/// Steps are limited by the trust region, so the estimate follows its branch continuously.
+#[derive(Clone, Debug)]
+pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize> {
+    model: &'a Model<T, A>,
+    basis: LoadBasis<T, P>,
+    settings: EstimatorSettings<T>,
+    x: Point<T, P>,
+    lin: Linearization<T, P>,
+    stability: Stability<T>,
+}
+
+impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Estimator<'a, T, A, P>
+where
+    Params: ParamCount<T, P>,
+{
+    /// Starts from a cold estimate for the first measurements; returns the estimator and that estimate.
+    pub fn new(
+        model: &'a Model<T, A>,
+        basis: LoadBasis<T, P>,
+        measured_m: &[T],
+        start_params: SVector<T, P>,
+        settings: EstimatorSettings<T>,
+    ) -> Result<(Self, Estimate<T, P>), ModelError> {
+        if settings.max_sweeps < 2 {
+            return Err(ModelError::OutOfRange("estimator sweep budget (at least 2)"));
+        }
+        positive(settings.tip_tolerance_m, "tip tolerance")?;
+        positive(settings.fit_tolerance_sigma, "fit tolerance")?;
+        let first = estimate(model, &basis, measured_m, InverseStart::Params(start_params), &settings.inverse)?;
+        let mut estimator = Estimator {
+            model,
+            basis,
+            settings,
+            x: Point { u0: first.base_strain_per_m, p: first.params },
+            lin: Linearization::empty(),
+            stability: first.report.stability,
+        };
+        let problem = estimator.problem(validate_measurements(model, measured_m)?);
+        let sw = problem.full_sweep(&estimator.x);
+        if sw.finite {
+            estimator.lin = problem.linearize(&estimator.x, &sw);
+        }
+        Ok((estimator, first))
+    }
+
+    /// The current parameters.
+    pub fn params(&self) -> SVector<T, P> {
+        self.x.p
+    }
+
+    fn problem(&self, measured: CableVector<T>) -> Problem<'a, T, A, P> {
+        Problem {
+            model: self.model,
+            basis: self.basis,
+            measured,
+            settings: self.settings.inverse,
+            cables: self.model.rod().cables.len(),
+            radius_m: self.model.rod().cables.iter().fold(T::zero(), |r, c| r.max(c.radius_m)),
+        }
+    }
+
+    /// One estimate for new measurements (one per cable, m), warm-started from the last.
+    pub fn update(&mut self, measured_m: &[T]) -> Result<Estimate<T, P>, ModelError> {
+        let problem = self.problem(validate_measurements(self.model, measured_m)?);
+        let mut work = crate::shooting::Work::default();
+        let budget = u16::from(self.settings.max_sweeps);
+
+        // The residual at the last estimate for the new measurements; the Jacobian is the last one.
+        work.sweeps += 1;
+        let sw = problem.plain_sweep(&self.x);
+        if !sw.finite {
+            return Ok(problem.finish(self.x, &self.lin, Termination::NonFinite, work));
+        }
+        self.lin.set_residual(&sw, problem.cable_residual(&sw));
+        let mut merit = problem.merit(&self.lin.e, &self.lin.rc);
+        let mut exact = false;
+        loop {
+            let Some(red) = problem.reduce(&self.lin) else {
+                return Ok(self.finish(&problem, Termination::Singular, work));
+            };
+            let step = problem.step(&red, T::zero());
+            if self.settled(&problem, step.as_ref(), &red) {
+                return Ok(self.finish(&problem, Termination::Converged, work));
+            }
+            let Some((du, dp)) = step else {
+                return Ok(self.finish(&problem, Termination::Singular, work));
+            };
+            if work.sweeps >= budget {
+                return Ok(self.finish(&problem, Termination::IterationLimit, work));
+            }
+            work.iterations = work.iterations.saturating_add(1);
+            work.sweeps += 1;
+            let trial = Point { u0: self.x.u0 + du, p: self.x.p + dp };
+            let sw = problem.full_sweep(&trial);
+            if sw.finite {
+                let lin = problem.linearize(&trial, &sw);
+                let trial_merit = problem.merit(&lin.e, &lin.rc);
+                if trial_merit < merit {
+                    (self.x, self.lin, merit, exact) = (trial, lin, trial_merit, true);
+                    self.stability = self.verdict(&problem);
+                    continue;
+                }
+            }
+            // The step failed. With a stale Jacobian, refresh it here once; with an exact one, stop.
+            if exact || work.sweeps >= budget {
+                return Ok(self.finish(&problem, Termination::Stalled, work));
+            }
+            work.sweeps += 1;
+            let sw = problem.full_sweep(&self.x);
+            if !sw.finite {
+                return Ok(self.finish(&problem, Termination::NonFinite, work));
+            }
+            self.lin = problem.linearize(&self.x, &sw);
+            self.stability = self.verdict(&problem);
+            exact = true;
+        }
+    }
+
+    fn verdict(&self, problem: &Problem<'_, T, A, P>) -> Stability<T> {
+        if problem.settings.check_stability {
+            let conservative = self.model.conservative(&self.basis.load(&self.x.p).moment_nm);
+            classify(conservative, self.lin.conjugate_point_m, &self.lin.j_eu, &self.lin.d_theta_tip_u, self.model.length_m())
+        } else {
+            Stability::Unchecked
+        }
+    }
+
+    /// Whether the next step is negligible: it would move the tip by less than the tip tolerance and
+    /// the fit by less than the fit tolerance.
+    fn settled(&self, problem: &Problem<'_, T, A, P>, step: Option<&(Vector3<T>, SVector<T, P>)>, red: &Reduced<T, P>) -> bool {
+        let fit_tolerance = self.settings.fit_tolerance_sigma.max(problem.fit_floor_sigma());
+        // The tip is resolved to about the shooting tolerance (an angle) times the rod length.
+        let tip_floor = self.model.length_m() * default_tolerance::<T>() * T::lit(4.0);
+        let tip_tolerance = self.settings.tip_tolerance_m.max(tip_floor);
+        step.is_some_and(|(du, dp)| {
+            let tip_move = (self.lin.d_tip_u * du + self.lin.d_tip_p * dp).norm();
+            let fit_move = (red.g * dp).norm();
+            tip_move <= tip_tolerance && fit_move <= fit_tolerance
+        })
+    }
+
+    fn finish(&self, problem: &Problem<'_, T, A, P>, termination: Termination, work: crate::shooting::Work) -> Estimate<T, P> {
+        let mut out = problem.finish(self.x, &self.lin, termination, work);
+        // Stability is judged at the last exact Jacobian.
+        if out.report.termination.is_success() {
+            out.report.stability = self.stability;
+            if !self.stability.is_acceptable() {
+                out.report.termination = Termination::Unstable;
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,64 @@
+//! Cosserat-rod statics of a cable-driven continuum robot, `no_std` and allocation-free.
+//!
+//! The model (thesis "Modeling and Verification of a Multi-section Continuum Robot", corrected in
+//! `MODEL.md`): a backbone of sections in series under gravity, guide masses, point loads and a tip
+//! load; cables through guides at a fixed offset. From a tip load, [`Model::solve`] finds the shape
+//! and the cable lengths; from measured cable lengths, [`inverse`] finds the tip load.
+//!
+//! Where each equation lives:
+//!
+//! | concept | module |
+//! | --- | --- |
+//! | kinematics `r' = R v`, `R' = R hat(u)`; frame representations | [`kinematics`] |
+//! | constitutive law, `v`, `u'` (eqs. 2.9-2.13) | [`constitutive`] |
+//! | mass distribution, average and accurate guide mass (ch. 3.6-3.8) | [`mass`] |
+//! | section transitions and point moments (ch. 3.4-3.5) | [`transitions`] |
+//! | the integration grid (breakpoints, distal forces) | [`plan`] |
+//! | one RK4 sweep with forward sensitivities | `integrate` |
+//! | cable lengths (ch. 3.8.1) | [`rod::Cable`], summed in `integrate` |
+//! | the shooting solve, load continuation | [`shooting`] |
+//! | elastic stability of an equilibrium (Jacobi fields) | [`stability`] |
+//! | the inverse: tip load from cable lengths | [`inverse`] |
+//! | shape output | [`shape`] |
+//!
+//! SI units throughout; names carry them (`length_m`, `force_n`).
+
+#![cfg_attr(not(test), no_std)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::indexing_slicing))]
+
+pub mod constitutive;
+pub mod error;
+mod integrate;
+pub mod inverse;
+pub mod kinematics;
+pub mod mass;
+pub mod model;
+pub mod plan;
+pub mod report;
+pub mod rod;
+pub mod scalar;
+pub mod shape;
+pub mod shooting;
+pub mod stability;
+pub mod transitions;
+
+pub use constitutive::{CrossSection, Material, Stiffness};
+pub use error::ModelError;
+pub use kinematics::{Attitude, LieGroup, Quaternion, RotationMatrix};
+pub use mass::GuideMass;
+pub use model::{Evaluation, Model};
+pub use report::{SolveReport, Termination};
+pub use rod::{Cable, Guide, PointLoad, Rod, Section, StrainModel};
+pub use scalar::Scalar;
+pub use shape::ShapePoint;
+pub use shooting::{Equilibrium, ShootingSettings, Start, TipLoad};
+pub use stability::Stability;
+
+/// Most sections in a rod.
+pub const MAX_SECTIONS: usize = 8;
+/// Most cable guides.
+pub const MAX_GUIDES: usize = 16;
+/// Most cables (a cable's termination bit must fit a `u8`).
+pub const MAX_CABLES: usize = 6;
+/// Most point loads (hung masses, forces, moments).
+pub const MAX_POINT_LOADS: usize = 8;

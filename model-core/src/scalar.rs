@@ -1,0 +1,75 @@
+//! The scalar type the model is generic over: `f32` on the MCU, `f64` on the host.
+
+use nalgebra::RealField;
+
+/// A real scalar for the rod model.
+///
+/// Everything in the model is written against nalgebra's [`RealField`]; this trait adds the few
+/// transcendental functions that sit on the integrator's hot path (frame normalisation, the
+/// exponential map, chord lengths), so that the `fast-math` feature can swap them for micromath's
+/// approximations on `f32`. That swap trades accuracy for speed and is measured, never assumed.
+pub trait Scalar: RealField + Copy {
+    /// Square root on the hot path (exact unless `fast-math` is on and `Self` is `f32`).
+    fn sqrt_hot(self) -> Self;
+    /// `(sin, cos)` on the hot path (exact unless `fast-math` is on and `Self` is `f32`).
+    fn sin_cos_hot(self) -> (Self, Self);
+    /// A literal in this scalar type.
+    #[inline]
+    fn lit(x: f64) -> Self {
+        nalgebra::convert(x)
+    }
+    /// The value as `f64`, for reports and comparisons.
+    fn to_f64(self) -> f64;
+}
+
+impl Scalar for f64 {
+    #[inline]
+    fn sqrt_hot(self) -> Self {
+        <f64 as nalgebra::ComplexField>::sqrt(self)
+    }
+    #[inline]
+    fn sin_cos_hot(self) -> (Self, Self) {
+        <f64 as nalgebra::ComplexField>::sin_cos(self)
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Scalar for f32 {
+    #[inline]
+    fn sqrt_hot(self) -> Self {
+        #[cfg(feature = "fast-math")]
+        {
+            micromath::F32Ext::sqrt(self)
+        }
+        #[cfg(not(feature = "fast-math"))]
+        {
+            <f32 as nalgebra::ComplexField>::sqrt(self)
+        }
+    }
+    #[inline]
+    fn sin_cos_hot(self) -> (Self, Self) {
+        #[cfg(feature = "fast-math")]
+        {
+            (micromath::F32Ext::sin(self), micromath::F32Ext::cos(self))
+        }
+        #[cfg(not(feature = "fast-math"))]
+        {
+            <f32 as nalgebra::ComplexField>::sin_cos(self)
+        }
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+/// `true` when every component is finite.
+#[inline]
+pub(crate) fn all_finite<T: Scalar, const R: usize, const C: usize>(
+    m: &nalgebra::SMatrix<T, R, C>,
+) -> bool {
+    m.iter().all(|x| x.is_finite())
+}

@@ -1,0 +1,45 @@
+//! Shape output: the backbone at caller-chosen arc lengths, written into the caller's buffer.
+
+use nalgebra::{Matrix3, Vector3};
+
+/// The backbone at one arc length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapePoint<T> {
+    /// Reference arc length, m.
+    pub s_m: T,
+    /// Position, m, global frame.
+    pub position_m: Vector3<T>,
+    /// Frame: columns are the local x, y, z (tangent) axes in global coordinates.
+    pub rotation: Matrix3<T>,
+    /// Bending and torsion strain `u` (body frame), 1/m; just distal of a node where it jumps.
+    pub strain_per_m: Vector3<T>,
+}
+
+impl<T: nalgebra::RealField + Copy> ShapePoint<T> {
+    /// The unit tangent (local z) in global coordinates.
+    pub fn tangent(&self) -> Vector3<T> {
+        self.rotation.column(2).into_owned()
+    }
+}
+
+/// Where a sweep writes shape points: sorted query arc lengths and an output slice of at least the same length.
+#[derive(Debug)]
+pub(crate) struct ShapeSink<'a, T> {
+    pub s_m: &'a [T],
+    pub out: &'a mut [ShapePoint<T>],
+    pub written: usize,
+}
+
+impl<T: Copy> ShapeSink<'_, T> {
+    /// The next query arc length not yet written.
+    pub fn next_query(&self) -> Option<T> {
+        self.s_m.get(self.written).copied()
+    }
+
+    pub fn write(&mut self, point: ShapePoint<T>) {
+        if let Some(slot) = self.out.get_mut(self.written) {
+            *slot = point;
+            self.written += 1;
+        }
+    }
+}
