@@ -92,7 +92,10 @@ pub struct Stiffness<T> {
 
 impl<T: Scalar> Stiffness<T> {
     /// From a material and a cross-section.
-    pub fn from_material(material: &Material<T>, section: &CrossSection<T>) -> Result<Self, ModelError> {
+    pub fn from_material(
+        material: &Material<T>,
+        section: &CrossSection<T>,
+    ) -> Result<Self, ModelError> {
         let (e, g) = (material.youngs_modulus_pa, material.shear_modulus_pa);
         Self::new(
             Vector3::new(
@@ -100,12 +103,19 @@ impl<T: Scalar> Stiffness<T> {
                 e * section.second_moment_m4[1],
                 g * section.polar_moment_m4,
             ),
-            Vector3::new(g * section.area_m2, g * section.area_m2, e * section.area_m2),
+            Vector3::new(
+                g * section.area_m2,
+                g * section.area_m2,
+                e * section.area_m2,
+            ),
         )
     }
 
     /// Given directly; every entry must be positive and finite.
-    pub fn new(bending_torsion_nm2: Vector3<T>, shear_axial_n: Vector3<T>) -> Result<Self, ModelError> {
+    pub fn new(
+        bending_torsion_nm2: Vector3<T>,
+        shear_axial_n: Vector3<T>,
+    ) -> Result<Self, ModelError> {
         for x in bending_torsion_nm2.iter() {
             positive(*x, "bending/torsion stiffness")?;
         }
@@ -158,7 +168,13 @@ impl<T: Scalar> Compliance<T> {
     /// Rate of the bending/torsion strain (thesis eq. 2.13, no distributed moment, no precurvature):
     /// `u' = -C^-1 (u x C u + v x n_l)`; `cu` is `C u`, already at hand.
     #[inline]
-    pub fn strain_rate(&self, u: &Vector3<T>, cu: &Vector3<T>, v: &Vector3<T>, n_local: &Vector3<T>) -> Vector3<T> {
+    pub fn strain_rate(
+        &self,
+        u: &Vector3<T>,
+        cu: &Vector3<T>,
+        v: &Vector3<T>,
+        n_local: &Vector3<T>,
+    ) -> Vector3<T> {
         -self.c_inv.component_mul(&(u.cross(cu) + v.cross(n_local)))
     }
 }

@@ -55,9 +55,15 @@ impl<T: Scalar> Seed<T> {
             let unit = |i: usize| if i == j % 3 { T::one() } else { T::zero() };
             let e = Vector3::new(unit(0), unit(1), unit(2));
             if j < 3 {
-                Self { du0: e, dforce_n: Vector3::zeros() }
+                Self {
+                    du0: e,
+                    dforce_n: Vector3::zeros(),
+                }
             } else {
-                Self { du0: Vector3::zeros(), dforce_n: e }
+                Self {
+                    du0: Vector3::zeros(),
+                    dforce_n: e,
+                }
             }
         })
     }
@@ -124,7 +130,10 @@ fn rates<T: Scalar, A: Attitude<T>, const K: usize>(
         Tangent {
             r: m * (t.th.cross(&v) + dv),
             th: t.u - p.u.cross(&t.th),
-            u: -f.comp.c_inv.component_mul(&(t.u.cross(&cu) + p.u.cross(&cdu) + dv.cross(&nl) + v.cross(&dnl))),
+            u: -f
+                .comp
+                .c_inv
+                .component_mul(&(t.u.cross(&cu) + p.u.cross(&cdu) + dv.cross(&nl) + v.cross(&dnl))),
         }
     });
     Rates {
@@ -136,7 +145,11 @@ fn rates<T: Scalar, A: Attitude<T>, const K: usize>(
 }
 
 #[inline]
-fn add_tangents<T: Scalar, const K: usize>(a: &[Tangent<T>; K], k: &[Tangent<T>; K], h: T) -> [Tangent<T>; K] {
+fn add_tangents<T: Scalar, const K: usize>(
+    a: &[Tangent<T>; K],
+    k: &[Tangent<T>; K],
+    h: T,
+) -> [Tangent<T>; K] {
     array::from_fn(|j| Tangent {
         r: a[j].r + k[j].r * h,
         th: a[j].th + k[j].th * h,
@@ -218,7 +231,13 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     }
 
     /// Adds the chord to the hole at `r + R d` (thesis ch. 3.8.1: cable length is the sum of chords).
-    fn add_hole(&mut self, r: &Vector3<T>, m: &Matrix3<T>, tan: &[Tangent<T>; K], offset: &Vector3<T>) {
+    fn add_hole(
+        &mut self,
+        r: &Vector3<T>,
+        m: &Matrix3<T>,
+        tan: &[Tangent<T>; K],
+        offset: &Vector3<T>,
+    ) {
         let hole = r + m * offset;
         let d_hole: [Vector3<T>; K] = array::from_fn(|j| tan[j].r + m * tan[j].th.cross(offset));
         if self.started {
@@ -226,7 +245,9 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
             let len = chord.norm_squared().sqrt_hot();
             self.length_m += len;
             if len > T::zero() {
-                for ((d_length, d_hole), d_prev) in self.d_length.iter_mut().zip(&d_hole).zip(&self.d_prev) {
+                for ((d_length, d_hole), d_prev) in
+                    self.d_length.iter_mut().zip(&d_hole).zip(&self.d_prev)
+                {
                     *d_length += chord.dot(&(d_hole - d_prev)) / len;
                 }
             }
@@ -298,12 +319,17 @@ fn is_finite_point<T: Scalar, A: Attitude<T>, const K: usize>(p: &Point<T, A, K>
     crate::scalar::all_finite(&p.r)
         && crate::scalar::all_finite(&p.u)
         && crate::scalar::all_finite(&p.att.matrix())
-        && p.tan
-            .iter()
-            .all(|t| crate::scalar::all_finite(&t.r) && crate::scalar::all_finite(&t.th) && crate::scalar::all_finite(&t.u))
+        && p.tan.iter().all(|t| {
+            crate::scalar::all_finite(&t.r)
+                && crate::scalar::all_finite(&t.th)
+                && crate::scalar::all_finite(&t.u)
+        })
 }
 
-fn shape_point<T: Scalar, A: Attitude<T>, const K: usize>(s: T, p: &Point<T, A, K>) -> ShapePoint<T> {
+fn shape_point<T: Scalar, A: Attitude<T>, const K: usize>(
+    s: T,
+    p: &Point<T, A, K>,
+) -> ShapePoint<T> {
     ShapePoint {
         s_m: s,
         position_m: p.r,
@@ -335,30 +361,36 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
             u: seeds[j].du0,
         }),
     };
-    let offsets: [Vector3<T>; MAX_CABLES] =
-        array::from_fn(|c| rod.cables.get(c).map_or(Vector3::zeros(), |cable| cable.offset_local_m()));
+    let offsets: [Vector3<T>; MAX_CABLES] = array::from_fn(|c| {
+        rod.cables
+            .get(c)
+            .map_or(Vector3::zeros(), |cable| cable.offset_local_m())
+    });
     let mut cables: [CableTrace<T, K>; MAX_CABLES] = array::from_fn(|_| CableTrace::new());
-    let mut stability = StabilityTrack { conjugate_point_m: None };
+    let mut stability = StabilityTrack {
+        conjugate_point_m: None,
+    };
     let mut frame_drift = T::zero();
     let mut proximal: Option<&Compliance<T>> = None;
 
-    let visit = |node: &Node<T>, p: &mut Point<T, A, K>, cables: &mut [CableTrace<T, K>; MAX_CABLES]| {
-        let m = p.att.matrix();
-        if node.guide != NO_GUIDE {
-            for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
-                if !trace.done {
-                    trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
+    let visit =
+        |node: &Node<T>, p: &mut Point<T, A, K>, cables: &mut [CableTrace<T, K>; MAX_CABLES]| {
+            let m = p.att.matrix();
+            if node.guide != NO_GUIDE {
+                for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
+                    if !trace.done {
+                        trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
+                    }
                 }
             }
-        }
-        for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
-            if node.cable_ends & (1u8 << c) != 0 && !trace.done {
-                trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
-                trace.done = true;
+            for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
+                if node.cable_ends & (1u8 << c) != 0 && !trace.done {
+                    trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
+                    trace.done = true;
+                }
             }
-        }
-        m
-    };
+            m
+        };
 
     for (k, interval) in plan.intervals.iter().enumerate() {
         let Some(comp) = model.compliance(interval.section) else {
@@ -403,7 +435,11 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
                         u: p.u,
                         tan: [],
                     };
-                    let at_q = if q > s { rk4_step(&field, &[], s, q - s, &here) } else { here };
+                    let at_q = if q > s {
+                        rk4_step(&field, &[], s, q - s, &here)
+                    } else {
+                        here
+                    };
                     sink.write(shape_point(q, &at_q));
                 }
             }
@@ -440,7 +476,9 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
         tip_position_m: p.r,
         tip_rotation: m,
         moment_residual_nm: comp.c.component_mul(&p.u) - tau_local,
-        d_moment_residual: array::from_fn(|j| comp.c.component_mul(&p.tan[j].u) - tau_local.cross(&p.tan[j].th)),
+        d_moment_residual: array::from_fn(|j| {
+            comp.c.component_mul(&p.tan[j].u) - tau_local.cross(&p.tan[j].th)
+        }),
         cable_m: [T::zero(); MAX_CABLES],
         d_cable: [[T::zero(); K]; MAX_CABLES],
         d_tip_position: array::from_fn(|j| p.tan[j].r),

@@ -22,7 +22,7 @@
 //! Jacobian, takes quasi-Newton (Broyden) steps with plain sweeps, and refreshes the Jacobian only
 //! when a step fails or on a schedule.
 
-use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVD, SVector, Vector3};
 
 use crate::error::{ModelError, finite, finite_vec, positive};
 use crate::integrate::{Seed, Sweep, sweep};
@@ -36,11 +36,12 @@ use crate::{MAX_CABLES, Scalar};
 /// Cable-length mismatches and other per-cable vectors, zero beyond the rod's cables.
 pub type CableVector<T> = SVector<T, MAX_CABLES>;
 
-/// The number of load parameters an estimate can have (1 to 3). The symmetric eigen-decomposition
-/// behind [`Quality`] needs a concrete size, so each is listed here.
+/// The number of load parameters an estimate can have (1 to 3). nalgebra's singular value
+/// decomposition behind [`Quality`] needs a concrete size, so each is listed here.
 pub trait ParamCount<T: Scalar, const P: usize> {
-    /// Eigenvalues and eigenvectors (columns) of a symmetric `P x P` matrix, `None` if it does not converge.
-    fn symmetric_eigen(m: SMatrix<T, P, P>) -> Option<(SVector<T, P>, SMatrix<T, P, P>)>;
+    /// Singular values and right singular vectors (columns of `V`) of a `MAX_CABLES x P` matrix,
+    /// `None` if the decomposition does not converge.
+    fn svd(m: SMatrix<T, MAX_CABLES, P>) -> Option<(SVector<T, P>, SMatrix<T, P, P>)>;
 }
 
 /// The marker implementing [`ParamCount`] for the supported sizes.
@@ -50,8 +51,9 @@ pub struct Params;
 macro_rules! param_count {
     ($($p:literal),*) => {$(
         impl<T: Scalar> ParamCount<T, $p> for Params {
-            fn symmetric_eigen(m: SMatrix<T, $p, $p>) -> Option<(SVector<T, $p>, SMatrix<T, $p, $p>)> {
-                SymmetricEigen::try_new(m, T::default_epsilon(), 200).map(|e| (e.eigenvalues, e.eigenvectors))
+            fn svd(m: SMatrix<T, MAX_CABLES, $p>) -> Option<(SVector<T, $p>, SMatrix<T, $p, $p>)> {
+                let svd = SVD::try_new(m, false, true, T::default_epsilon(), 200)?;
+                Some((svd.singular_values, svd.v_t?.transpose()))
             }
         }
     )*};
@@ -106,7 +108,8 @@ impl<T: Scalar, const P: usize> LoadBasis<T, P> {
 
     fn validate(&self) -> Result<(), ModelError> {
         self.offset.validate()?;
-        if !crate::scalar::all_finite(&self.force_n) || !crate::scalar::all_finite(&self.moment_nm) {
+        if !crate::scalar::all_finite(&self.force_n) || !crate::scalar::all_finite(&self.moment_nm)
+        {
             return Err(ModelError::NonFinite("load basis"));
         }
         Ok(())
@@ -316,33 +319,60 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
 
     fn plain_sweep(&self, x: &Point<T, P>) -> Sweep<T, 0> {
         let load = self.basis.load(&x.p);
-        sweep::<T, A, 0>(self.model, &self.model.inputs(&x.u0, &load, T::one()), &[], false, None)
+        sweep::<T, A, 0>(
+            self.model,
+            &self.model.inputs(&x.u0, &load, T::one()),
+            &[],
+            false,
+            None,
+        )
     }
 
     fn cable_residual<const K: usize>(&self, sw: &Sweep<T, K>) -> CableVector<T> {
-        CableVector::from_fn(|c, _| match (c < self.cables, sw.cable_m.get(c), self.measured.get(c)) {
-            (true, Some(model), Some(measured)) => *model - *measured,
-            _ => T::zero(),
+        CableVector::from_fn(|c, _| {
+            match (c < self.cables, sw.cable_m.get(c), self.measured.get(c)) {
+                (true, Some(model), Some(measured)) => *model - *measured,
+                _ => T::zero(),
+            }
         })
     }
 
     fn linearize(&self, x: &Point<T, P>, sw: &Sweep<T, 6>) -> Linearization<T, P> {
-        let col = |j: usize| sw.d_moment_residual.get(j).copied().unwrap_or_else(Vector3::zeros);
+        let col = |j: usize| {
+            sw.d_moment_residual
+                .get(j)
+                .copied()
+                .unwrap_or_else(Vector3::zeros)
+        };
         let j_eu = Matrix3::from_columns(&[col(0), col(1), col(2)]);
         let j_ef = Matrix3::from_columns(&[col(3), col(4), col(5)]);
         // e = C u - R^T tau: d e / d tau = -R^T.
         let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
         let cable = |c: usize, j: usize| {
             if c < self.cables {
-                sw.d_cable.get(c).and_then(|row| row.get(j)).copied().unwrap_or_else(T::zero)
+                sw.d_cable
+                    .get(c)
+                    .and_then(|row| row.get(j))
+                    .copied()
+                    .unwrap_or_else(T::zero)
             } else {
                 T::zero()
             }
         };
         let j_cu = SMatrix::<T, MAX_CABLES, 3>::from_fn(&cable);
         let j_cf = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, j + 3));
-        let tip = |j: usize| sw.d_tip_position.get(j).copied().unwrap_or_else(Vector3::zeros);
-        let theta = |j: usize| sw.d_tip_rotation.get(j).copied().unwrap_or_else(Vector3::zeros);
+        let tip = |j: usize| {
+            sw.d_tip_position
+                .get(j)
+                .copied()
+                .unwrap_or_else(Vector3::zeros)
+        };
+        let theta = |j: usize| {
+            sw.d_tip_rotation
+                .get(j)
+                .copied()
+                .unwrap_or_else(Vector3::zeros)
+        };
         let _ = x;
         Linearization {
             e: sw.moment_residual_nm,
@@ -367,15 +397,19 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         let inv_std = T::one() / self.settings.length_std_m;
         let g = (lin.j_cp - lin.j_cu * a) * inv_std;
         let c = (lin.rc - lin.j_cu * b) * inv_std;
-        let ok = crate::scalar::all_finite(&g) && crate::scalar::all_finite(&c) && crate::scalar::all_finite(&a);
+        let ok = crate::scalar::all_finite(&g)
+            && crate::scalar::all_finite(&c)
+            && crate::scalar::all_finite(&a);
         ok.then_some(Reduced { a, b, g, c })
     }
 
     /// The merit the step must decrease: squared cable mismatch in standard deviations, plus the
     /// tip-moment error converted to the cable-length change it would cause.
     fn merit(&self, e: &Vector3<T>, rc: &CableVector<T>) -> T {
-        let moment_as_length = self.model.moment_residual(e) * self.radius_m / self.settings.length_std_m;
-        rc.norm_squared() / (self.settings.length_std_m * self.settings.length_std_m) + moment_as_length * moment_as_length
+        let moment_as_length =
+            self.model.moment_residual(e) * self.radius_m / self.settings.length_std_m;
+        rc.norm_squared() / (self.settings.length_std_m * self.settings.length_std_m)
+            + moment_as_length * moment_as_length
     }
 
     /// The damped reduced step, limited by the trust region.
@@ -423,32 +457,35 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         let Some(red) = red else {
             return quality;
         };
-        let normal = red.g.tr_mul(&red.g);
-        let Some((eigenvalues, eigenvectors)) = Params::symmetric_eigen(normal) else {
+        // The SVD of G itself, not of G^T G: the normal matrix squares the condition number, which
+        // f32 cannot hold for the axial direction.
+        let Some((singular, v)) = Params::svd(red.g) else {
             return quality;
         };
         let (mut largest, mut smallest, mut weakest) = (T::zero(), infinite, 0usize);
-        for (i, &value) in eigenvalues.iter().enumerate() {
-            let value = value.max(T::zero());
+        for (i, &value) in singular.iter().enumerate() {
             largest = largest.max(value);
             if value < smallest {
                 (smallest, weakest) = (value, i);
             }
         }
-        let mut sorted: SVector<T, P> = eigenvalues.map(|v| v.max(T::zero()).sqrt());
-        sorted.as_mut_slice().sort_unstable_by(|a, b| b.partial_cmp(a).unwrap_or(core::cmp::Ordering::Equal));
+        let mut sorted = singular;
+        sorted
+            .as_mut_slice()
+            .sort_unstable_by(|a, b| b.partial_cmp(a).unwrap_or(core::cmp::Ordering::Equal));
         quality.singular_values = sorted;
-        quality.weakest_direction = eigenvectors.column(weakest).into_owned();
-        let rank_deficient = smallest <= largest * T::default_epsilon() * T::lit(1e3) || largest == T::zero();
+        quality.weakest_direction = v.column(weakest).into_owned();
+        let rank_deficient =
+            smallest <= largest * T::default_epsilon() * T::lit(100.0) || largest == T::zero();
         if rank_deficient {
             return quality;
         }
-        quality.condition_number = (largest / smallest).sqrt();
-        // Covariance of p: (G^T G / s^2)^-1 = V diag(1/lambda) V^T.
-        let covariance = eigenvectors
-            * SMatrix::<T, P, P>::from_diagonal(&eigenvalues.map(|v| T::one() / v))
-            * eigenvectors.transpose();
-        quality.param_std = covariance.diagonal().map(|v| v.max(T::zero()).sqrt());
+        quality.condition_number = largest / smallest;
+        // Covariance of p: (G^T G / s^2)^-1 = V diag(1 / sigma^2) V^T.
+        let covariance = v
+            * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
+            * v.transpose();
+        quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
         let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
         quality.force_std_n = force_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
         // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
@@ -456,7 +493,10 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         let tip_cov = d_tip * covariance * d_tip.transpose();
         quality.tip_std_m = tip_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
         let moment_cov = self.basis.moment_nm * covariance * self.basis.moment_nm.transpose();
-        let worst = quality.force_std_n.max().max(moment_cov.diagonal().max().max(T::zero()).sqrt());
+        let worst = quality
+            .force_std_n
+            .max()
+            .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
         quality.determination = if residual_rms_sigma > T::lit(3.0) {
             Determination::Inconsistent
         } else if worst > self.settings.max_force_std_n {
@@ -473,14 +513,31 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         T::default_epsilon() * T::lit(16.0) * self.model.length_m() / self.settings.length_std_m
     }
 
-    fn converged(&self, lin: &Linearization<T, P>, step: Option<&(Vector3<T>, SVector<T, P>)>, red: &Reduced<T, P>) -> bool {
-        if self.model.moment_residual(&lin.e) > self.settings.tolerance {
+    fn converged(
+        &self,
+        x: &Point<T, P>,
+        lin: &Linearization<T, P>,
+        step: Option<&(Vector3<T>, SVector<T, P>)>,
+        red: &Reduced<T, P>,
+    ) -> bool {
+        // The tip-moment condition holds when its residual is small or, at the rounding floor, when
+        // the correction it asks for (`J_eu^-1 e`) is negligible.
+        let moment_ok = self
+            .model
+            .moment_converged(&lin.e, &x.u0, self.settings.tolerance)
+            || self
+                .model
+                .step_converged(&red.b, &x.u0, self.settings.tolerance);
+        if !moment_ok {
             return false;
         }
         if lin.rc.amax() <= self.settings.length_tolerance_m {
             return true;
         }
-        let tolerance = self.settings.step_tolerance_sigma.max(self.fit_floor_sigma());
+        let tolerance = self
+            .settings
+            .step_tolerance_sigma
+            .max(self.fit_floor_sigma());
         step.is_some_and(|(_, dp)| (red.g * dp).norm() <= tolerance)
     }
 }
@@ -514,7 +571,9 @@ fn validate_measurements<T: Scalar, A: Attitude<T>>(
     for (c, (&length, cable)) in measured_m.iter().zip(rod.cables.iter()).enumerate() {
         positive(length, "cable length")?;
         if length > cable_length_bound_m(rod, cable) {
-            return Err(ModelError::OutOfRange("cable length (longer than the rod can produce)"));
+            return Err(ModelError::OutOfRange(
+                "cable length (longer than the rod can produce)",
+            ));
         }
         if let Some(slot) = out.get_mut(c) {
             *slot = length;
@@ -528,7 +587,12 @@ fn validate_measurements<T: Scalar, A: Attitude<T>>(
 pub fn cable_length_bound_m<T: Scalar>(rod: &crate::Rod<T>, cable: &crate::Cable<T>) -> T {
     let mut previous: Option<T> = None;
     let mut bound = T::zero();
-    let holes = rod.guides.iter().map(|g| g.s_m).filter(|s| *s <= cable.end_m).chain(core::iter::once(cable.end_m));
+    let holes = rod
+        .guides
+        .iter()
+        .map(|g| g.s_m)
+        .filter(|s| *s <= cable.end_m)
+        .chain(core::iter::once(cable.end_m));
     for s in holes {
         if let Some(prev) = previous {
             bound += (s - prev) * T::lit(1.1) + cable.radius_m * T::lit(2.0);
@@ -561,7 +625,11 @@ where
         measured,
         settings: *settings,
         cables: model.rod().cables.len(),
-        radius_m: model.rod().cables.iter().fold(T::zero(), |r, c| r.max(c.radius_m)),
+        radius_m: model
+            .rod()
+            .cables
+            .iter()
+            .fold(T::zero(), |r, c| r.max(c.radius_m)),
     };
     let mut work = crate::shooting::Work::default();
     let x = match start {
@@ -578,17 +646,43 @@ where
             work.iterations = eq.report.iterations;
             work.sweeps = eq.report.sweeps;
             if !eq.report.termination.is_success() {
-                let lin = problem.linearize(&Point { u0: eq.base_strain_per_m, p }, &problem.full_sweep(&Point { u0: eq.base_strain_per_m, p }));
-                return Ok(problem.finish(Point { u0: eq.base_strain_per_m, p }, &lin, eq.report.termination, work));
+                let lin = problem.linearize(
+                    &Point {
+                        u0: eq.base_strain_per_m,
+                        p,
+                    },
+                    &problem.full_sweep(&Point {
+                        u0: eq.base_strain_per_m,
+                        p,
+                    }),
+                );
+                return Ok(problem.finish(
+                    Point {
+                        u0: eq.base_strain_per_m,
+                        p,
+                    },
+                    &lin,
+                    eq.report.termination,
+                    work,
+                ));
             }
-            Point { u0: eq.base_strain_per_m, p }
+            Point {
+                u0: eq.base_strain_per_m,
+                p,
+            }
         }
-        InverseStart::Warm { params, base_strain_per_m } => {
+        InverseStart::Warm {
+            params,
+            base_strain_per_m,
+        } => {
             finite_vec(&base_strain_per_m, "warm-start base strain")?;
             for v in params.iter() {
                 finite(*v, "start parameters")?;
             }
-            Point { u0: base_strain_per_m, p: params }
+            Point {
+                u0: base_strain_per_m,
+                p: params,
+            }
         }
     };
     Ok(problem.solve(x, work))
@@ -614,14 +708,17 @@ where
                 return self.finish(x, &lin, Termination::Singular, work);
             };
             let step = self.step(&red, mu);
-            if self.converged(&lin, step.as_ref(), &red) {
+            if self.converged(&x, &lin, step.as_ref(), &red) {
                 return self.finish(x, &lin, Termination::Converged, work);
             }
             let Some((du, dp)) = step else {
                 return self.finish(x, &lin, Termination::Singular, work);
             };
             work.iterations = work.iterations.saturating_add(1);
-            let trial = Point { u0: x.u0 + du, p: x.p + dp };
+            let trial = Point {
+                u0: x.u0 + du,
+                p: x.p + dp,
+            };
             work.sweeps = work.sweeps.saturating_add(1);
             let sw = self.full_sweep(&trial);
             let trial_lin = sw.finite.then(|| self.linearize(&trial, &sw));
@@ -636,7 +733,11 @@ where
                     rejections = 0;
                 }
                 _ => {
-                    mu = if mu == T::zero() { T::lit(1e-3) } else { mu * T::lit(8.0) };
+                    mu = if mu == T::zero() {
+                        T::lit(1e-3)
+                    } else {
+                        mu * T::lit(8.0)
+                    };
                     rejections += 1;
                     if rejections >= 8 {
                         return self.finish(x, &lin, Termination::Stalled, work);
@@ -646,18 +747,36 @@ where
         }
         let red = self.reduce(&lin);
         let step = red.as_ref().and_then(|r| self.step(r, T::zero()));
-        let done = red.as_ref().is_some_and(|r| self.converged(&lin, step.as_ref(), r));
-        let termination = if done { Termination::Converged } else { Termination::IterationLimit };
+        let done = red
+            .as_ref()
+            .is_some_and(|r| self.converged(&x, &lin, step.as_ref(), r));
+        let termination = if done {
+            Termination::Converged
+        } else {
+            Termination::IterationLimit
+        };
         self.finish(x, &lin, termination, work)
     }
 
-    fn finish(&self, x: Point<T, P>, lin: &Linearization<T, P>, termination: Termination, work: crate::shooting::Work) -> Estimate<T, P> {
+    fn finish(
+        &self,
+        x: Point<T, P>,
+        lin: &Linearization<T, P>,
+        termination: Termination,
+        work: crate::shooting::Work,
+    ) -> Estimate<T, P> {
         let red = self.reduce(lin);
         let quality = self.quality(lin, red.as_ref());
         let mut termination = termination;
         let stability = if termination.is_success() && self.settings.check_stability {
             let conservative = self.model.conservative(&self.basis.load(&x.p).moment_nm);
-            let verdict = classify(conservative, lin.conjugate_point_m, &lin.j_eu, &lin.d_theta_tip_u, self.model.length_m());
+            let verdict = classify(
+                conservative,
+                lin.conjugate_point_m,
+                &lin.j_eu,
+                &lin.d_theta_tip_u,
+                self.model.length_m(),
+            );
             if !verdict.is_acceptable() {
                 termination = Termination::Unstable;
             }
@@ -666,7 +785,11 @@ where
             Stability::Unchecked
         };
         let moment = self.model.moment_residual(&lin.e);
-        let cables = if self.cables > 0 { T::lit(self.cables as f64) } else { T::one() };
+        let cables = if self.cables > 0 {
+            T::lit(self.cables as f64)
+        } else {
+            T::one()
+        };
         let length_residual = (lin.rc.norm_squared() / cables).sqrt() / self.model.length_m();
         Estimate {
             params: x.p,
@@ -759,16 +882,27 @@ where
         settings: EstimatorSettings<T>,
     ) -> Result<(Self, Estimate<T, P>), ModelError> {
         if settings.max_sweeps < 2 {
-            return Err(ModelError::OutOfRange("estimator sweep budget (at least 2)"));
+            return Err(ModelError::OutOfRange(
+                "estimator sweep budget (at least 2)",
+            ));
         }
         positive(settings.tip_tolerance_m, "tip tolerance")?;
         positive(settings.fit_tolerance_sigma, "fit tolerance")?;
-        let first = estimate(model, &basis, measured_m, InverseStart::Params(start_params), &settings.inverse)?;
+        let first = estimate(
+            model,
+            &basis,
+            measured_m,
+            InverseStart::Params(start_params),
+            &settings.inverse,
+        )?;
         let mut estimator = Estimator {
             model,
             basis,
             settings,
-            x: Point { u0: first.base_strain_per_m, p: first.params },
+            x: Point {
+                u0: first.base_strain_per_m,
+                p: first.params,
+            },
             lin: Linearization::empty(),
             stability: first.report.stability,
         };
@@ -792,7 +926,12 @@ where
             measured,
             settings: self.settings.inverse,
             cables: self.model.rod().cables.len(),
-            radius_m: self.model.rod().cables.iter().fold(T::zero(), |r, c| r.max(c.radius_m)),
+            radius_m: self
+                .model
+                .rod()
+                .cables
+                .iter()
+                .fold(T::zero(), |r, c| r.max(c.radius_m)),
         }
     }
 
@@ -827,7 +966,10 @@ where
             }
             work.iterations = work.iterations.saturating_add(1);
             work.sweeps += 1;
-            let trial = Point { u0: self.x.u0 + du, p: self.x.p + dp };
+            let trial = Point {
+                u0: self.x.u0 + du,
+                p: self.x.p + dp,
+            };
             let sw = problem.full_sweep(&trial);
             if sw.finite {
                 let lin = problem.linearize(&trial, &sw);
@@ -855,8 +997,16 @@ where
 
     fn verdict(&self, problem: &Problem<'_, T, A, P>) -> Stability<T> {
         if problem.settings.check_stability {
-            let conservative = self.model.conservative(&self.basis.load(&self.x.p).moment_nm);
-            classify(conservative, self.lin.conjugate_point_m, &self.lin.j_eu, &self.lin.d_theta_tip_u, self.model.length_m())
+            let conservative = self
+                .model
+                .conservative(&self.basis.load(&self.x.p).moment_nm);
+            classify(
+                conservative,
+                self.lin.conjugate_point_m,
+                &self.lin.j_eu,
+                &self.lin.d_theta_tip_u,
+                self.model.length_m(),
+            )
         } else {
             Stability::Unchecked
         }
@@ -864,8 +1014,16 @@ where
 
     /// Whether the next step is negligible: it would move the tip by less than the tip tolerance and
     /// the fit by less than the fit tolerance.
-    fn settled(&self, problem: &Problem<'_, T, A, P>, step: Option<&(Vector3<T>, SVector<T, P>)>, red: &Reduced<T, P>) -> bool {
-        let fit_tolerance = self.settings.fit_tolerance_sigma.max(problem.fit_floor_sigma());
+    fn settled(
+        &self,
+        problem: &Problem<'_, T, A, P>,
+        step: Option<&(Vector3<T>, SVector<T, P>)>,
+        red: &Reduced<T, P>,
+    ) -> bool {
+        let fit_tolerance = self
+            .settings
+            .fit_tolerance_sigma
+            .max(problem.fit_floor_sigma());
         // The tip is resolved to about the shooting tolerance (an angle) times the rod length.
         let tip_floor = self.model.length_m() * default_tolerance::<T>() * T::lit(4.0);
         let tip_tolerance = self.settings.tip_tolerance_m.max(tip_floor);
@@ -876,7 +1034,12 @@ where
         })
     }
 
-    fn finish(&self, problem: &Problem<'_, T, A, P>, termination: Termination, work: crate::shooting::Work) -> Estimate<T, P> {
+    fn finish(
+        &self,
+        problem: &Problem<'_, T, A, P>,
+        termination: Termination,
+        work: crate::shooting::Work,
+    ) -> Estimate<T, P> {
         let mut out = problem.finish(self.x, &self.lin, termination, work);
         // Stability is judged at the last exact Jacobian.
         if out.report.termination.is_success() {

@@ -24,7 +24,15 @@
 //! SI units throughout; names carry them (`length_m`, `force_n`).
 
 #![cfg_attr(not(test), no_std)]
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::indexing_slicing))]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
 
 pub mod constitutive;
 pub mod error;
@@ -34,9 +42,11 @@ pub mod kinematics;
 pub mod mass;
 pub mod model;
 pub mod plan;
+pub mod reference;
 pub mod report;
 pub mod rod;
 pub mod scalar;
+pub mod selftest;
 pub mod shape;
 pub mod shooting;
 pub mod stability;

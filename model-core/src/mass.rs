@@ -23,11 +23,18 @@ pub enum GuideMass {
 
 /// Whether a guide's mass is placed as its own segment (and so its edges are breakpoints).
 pub(crate) fn guide_is_segment<T: Scalar>(rod: &Rod<T>, guide: &crate::Guide<T>) -> bool {
-    rod.guide_mass == GuideMass::Accurate && guide.mass_kg > T::zero() && guide.thickness_m > T::zero()
+    rod.guide_mass == GuideMass::Accurate
+        && guide.mass_kg > T::zero()
+        && guide.thickness_m > T::zero()
 }
 
 /// Line density, kg/m, on an interval of section `section` with midpoint `s_mid` (no breakpoint inside it).
-pub(crate) fn line_density_kg_per_m<T: Scalar>(rod: &Rod<T>, section: usize, section_start_m: T, s_mid: T) -> T {
+pub(crate) fn line_density_kg_per_m<T: Scalar>(
+    rod: &Rod<T>,
+    section: usize,
+    section_start_m: T,
+    s_mid: T,
+) -> T {
     let Some(sec) = rod.sections.get(section) else {
         return T::zero();
     };
@@ -39,7 +46,10 @@ pub(crate) fn line_density_kg_per_m<T: Scalar>(rod: &Rod<T>, section: usize, sec
             let guides_kg = rod
                 .guides
                 .iter()
-                .filter(|g| g.s_m >= section_start_m && (g.s_m < end || (g.s_m <= end && is_last(rod, section))))
+                .filter(|g| {
+                    g.s_m >= section_start_m
+                        && (g.s_m < end || (g.s_m <= end && is_last(rod, section)))
+                })
                 .fold(T::zero(), |acc, g| acc + g.mass_kg);
             density += guides_kg / sec.length_m;
         }
@@ -61,13 +71,14 @@ fn is_last<T>(rod: &Rod<T>, section: usize) -> bool {
 
 /// Total mass carried by the backbone beyond the clamp, kg: rod, guides and hung masses.
 pub fn total_mass_kg<T: Scalar>(rod: &Rod<T>) -> T {
-    let rod_kg = rod
-        .sections
-        .iter()
-        .fold(T::zero(), |acc, s| acc + s.line_density_kg_per_m * s.length_m);
+    let rod_kg = rod.sections.iter().fold(T::zero(), |acc, s| {
+        acc + s.line_density_kg_per_m * s.length_m
+    });
     let guides_kg = match rod.guide_mass {
         GuideMass::Ignore => T::zero(),
-        GuideMass::Average | GuideMass::Accurate => rod.guides.iter().fold(T::zero(), |acc, g| acc + g.mass_kg),
+        GuideMass::Average | GuideMass::Accurate => {
+            rod.guides.iter().fold(T::zero(), |acc, g| acc + g.mass_kg)
+        }
     };
     let hung_kg = rod.loads.iter().fold(T::zero(), |acc, l| acc + l.mass_kg);
     rod_kg + guides_kg + hung_kg

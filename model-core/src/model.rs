@@ -89,7 +89,12 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
 
     /// Whether every load on the rod plus `tip_moment_nm` is conservative (no moment acts).
     pub(crate) fn conservative(&self, tip_moment_nm: &Vector3<T>) -> bool {
-        *tip_moment_nm == Vector3::zeros() && self.rod.loads.iter().all(|l| l.moment_nm == Vector3::zeros())
+        *tip_moment_nm == Vector3::zeros()
+            && self
+                .rod
+                .loads
+                .iter()
+                .all(|l| l.moment_nm == Vector3::zeros())
     }
 
     pub(crate) fn base_attitude(&self) -> &A {
@@ -105,11 +110,33 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
         e.norm() / self.moment_scale_nm
     }
 
+    /// Whether a Newton correction `du0` of the base strain is negligible: it turns the base by less
+    /// than `tolerance` (relative to `|u0| L` beyond one radian, as for the residual).
+    pub(crate) fn step_converged(&self, du0: &Vector3<T>, u0: &Vector3<T>, tolerance: T) -> bool {
+        du0.norm() * self.length_m <= tolerance * (u0.norm() * self.length_m).max(T::one())
+    }
+
+    /// Whether a tip-moment residual meets `tolerance` at base strain `u0`: the tolerance is relative
+    /// to the base rotation `|u0| L` once that exceeds one radian, because rounding grows with it.
+    pub(crate) fn moment_converged(&self, e: &Vector3<T>, u0: &Vector3<T>, tolerance: T) -> bool {
+        self.moment_residual(e) <= tolerance * (u0.norm() * self.length_m).max(T::one())
+    }
+
     /// One sweep at base strain `u0` (1/m) under `load`, without solving for the boundary condition.
-    pub fn evaluate(&self, base_strain_per_m: &Vector3<T>, load: &TipLoad<T>) -> Result<Evaluation<T>, ModelError> {
+    pub fn evaluate(
+        &self,
+        base_strain_per_m: &Vector3<T>,
+        load: &TipLoad<T>,
+    ) -> Result<Evaluation<T>, ModelError> {
         finite_vec(base_strain_per_m, "base strain")?;
         load.validate()?;
-        let out = sweep::<T, A, 0>(self, &self.inputs(base_strain_per_m, load, T::one()), &[], false, None);
+        let out = sweep::<T, A, 0>(
+            self,
+            &self.inputs(base_strain_per_m, load, T::one()),
+            &[],
+            false,
+            None,
+        );
         if !out.finite {
             return Err(ModelError::NonFinite("sweep result"));
         }
@@ -124,7 +151,12 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
 
     /// The shape of a solved equilibrium at the arc lengths `s_m` (increasing, within `[0, L]`),
     /// written into `out` (at least as long). Returns how many points were written.
-    pub fn shape(&self, equilibrium: &Equilibrium<T>, s_m: &[T], out: &mut [ShapePoint<T>]) -> Result<usize, ModelError> {
+    pub fn shape(
+        &self,
+        equilibrium: &Equilibrium<T>,
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<usize, ModelError> {
         self.shape_at(&equilibrium.base_strain_per_m, &equilibrium.load, s_m, out)
     }
 
@@ -152,7 +184,11 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
             }
             previous = s;
         }
-        let mut sink = ShapeSink { s_m, out, written: 0 };
+        let mut sink = ShapeSink {
+            s_m,
+            out,
+            written: 0,
+        };
         let sw = sweep::<T, A, 0>(
             self,
             &self.inputs(base_strain_per_m, load, T::one()),
@@ -183,14 +219,22 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
         let half = T::lit(0.5);
         let mut force_integral = Vector3::zeros();
         let mut moments = load.moment_nm;
-        for (interval, node) in self.plan.intervals.iter().zip(self.plan.nodes.iter().skip(1)) {
+        for (interval, node) in self
+            .plan
+            .intervals
+            .iter()
+            .zip(self.plan.nodes.iter().skip(1))
+        {
             let len = interval.s1_m - interval.s0_m;
             force_integral += (load.force_n + interval.distal_force_n) * len
                 + g * (interval.line_density_kg_per_m * len * len * half);
             moments += node.moment_nm;
         }
         let m0 = (moments + tangent.cross(&force_integral)) * load_scale;
-        let c_inv = self.compliances.first().map_or(Vector3::zeros(), |c| c.c_inv);
+        let c_inv = self
+            .compliances
+            .first()
+            .map_or(Vector3::zeros(), |c| c.c_inv);
         c_inv.component_mul(&self.rod.base_orientation.tr_mul(&m0))
     }
 }

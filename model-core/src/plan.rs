@@ -61,7 +61,11 @@ impl<T: Scalar> Plan<T> {
 
         // 1. Breakpoints.
         let mut points: Vec<T, MAX_NODES> = Vec::new();
-        let mut push = |s: T| points.push(s).map_err(|_| ModelError::Capacity("breakpoints"));
+        let mut push = |s: T| {
+            points
+                .push(s)
+                .map_err(|_| ModelError::Capacity("breakpoints"))
+        };
         push(T::zero())?;
         let mut end = T::zero();
         for section in &rod.sections {
@@ -96,7 +100,9 @@ impl<T: Scalar> Plan<T> {
                     cable_ends: 0,
                     moment_nm: Vector3::zeros(),
                 };
-                nodes.push(node).map_err(|_| ModelError::Capacity("nodes"))?;
+                nodes
+                    .push(node)
+                    .map_err(|_| ModelError::Capacity("nodes"))?;
             }
         }
         if let Some(last) = nodes.last_mut()
@@ -104,7 +110,9 @@ impl<T: Scalar> Plan<T> {
         {
             last.s_m = length;
         }
-        let at = |nodes: &Vec<Node<T>, MAX_NODES>, s: T| nodes.iter().position(|n| (n.s_m - s).abs() <= tol);
+        let at = |nodes: &Vec<Node<T>, MAX_NODES>, s: T| {
+            nodes.iter().position(|n| (n.s_m - s).abs() <= tol)
+        };
         for (g, guide) in rod.guides.iter().enumerate() {
             if let Some(i) = at(&nodes, guide.s_m)
                 && let Some(node) = nodes.get_mut(i)
@@ -135,7 +143,10 @@ impl<T: Scalar> Plan<T> {
             let [a, b] = pair else { continue };
             let mid = (a.s_m + b.s_m) * T::lit(0.5);
             let (section, section_start) = section_at(rod, mid);
-            let sec = rod.sections.get(section).ok_or(ModelError::OutOfRange("section"))?;
+            let sec = rod
+                .sections
+                .get(section)
+                .ok_or(ModelError::OutOfRange("section"))?;
             let h_target = sec.length_m / T::lit(f64::from(sec.steps));
             let ratio = ((b.s_m - a.s_m) / h_target - T::lit(1e-3)).ceil().to_f64();
             let steps = if ratio >= f64::from(u16::MAX) {
@@ -154,7 +165,9 @@ impl<T: Scalar> Plan<T> {
                 line_density_kg_per_m: line_density_kg_per_m(rod, section, section_start, mid),
                 distal_force_n: Vector3::zeros(),
             };
-            intervals.push(interval).map_err(|_| ModelError::Capacity("intervals"))?;
+            intervals
+                .push(interval)
+                .map_err(|_| ModelError::Capacity("intervals"))?;
         }
 
         // 4. Distal forces, from the tip down: N_{k-1} = N_k + g lambda_k (s_{k+1} - s_k) + loads at s_k.

@@ -256,7 +256,8 @@ impl<T: Scalar> Rod<T> {
             return Err(ModelError::NonFinite("base orientation"));
         }
         let m = &self.base_orientation;
-        if crate::kinematics::orthonormality_error(m) > T::lit(1e-4) || m.determinant() <= T::zero() {
+        if crate::kinematics::orthonormality_error(m) > T::lit(1e-4) || m.determinant() <= T::zero()
+        {
             return Err(ModelError::OutOfRange("base orientation (not a rotation)"));
         }
         Ok(())

@@ -70,7 +70,8 @@ pub enum Start<T> {
 pub struct ShootingSettings<T> {
     /// Newton iterations per solve (per load step during continuation).
     pub max_iterations: u16,
-    /// Tolerance on the dimensionless residual `|tip moment error| L / (E I)`.
+    /// Tolerance on the dimensionless residual `|tip moment error| L / (E I)`, relative to the base
+    /// rotation `|u0| L` when that exceeds one radian.
     pub tolerance: T,
     /// Trust region: largest change of base strain per iteration, as an angle `|du0| L`, rad.
     pub max_rotation_step_rad: T,
@@ -188,20 +189,36 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
     let seeds = Seed::base_strain();
     let run = |u: &Vector3<T>, work: &mut Work| {
         work.sweep();
-        sweep::<T, A, 3>(model, &model.inputs(u, load, alpha), &seeds, settings.check_stability, None)
+        sweep::<T, A, 3>(
+            model,
+            &model.inputs(u, load, alpha),
+            &seeds,
+            settings.check_stability,
+            None,
+        )
     };
     let mut u0 = start;
     let mut sw = run(&u0, work);
     if !sw.finite {
-        return Newton { u0, sweep: sw, residual: T::zero(), termination: Termination::NonFinite };
+        return Newton {
+            u0,
+            sweep: sw,
+            residual: T::zero(),
+            termination: Termination::NonFinite,
+        };
     }
     let mut residual = model.moment_residual(&sw.moment_residual_nm);
     let max_step = settings.max_rotation_step_rad / model.length_m();
     let mut mu = T::zero();
     let mut rejections = 0u8;
     for _ in 0..max_iterations {
-        if residual <= settings.tolerance {
-            return Newton { u0, sweep: sw, residual, termination: Termination::Converged };
+        if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
+            return Newton {
+                u0,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
         }
         let jacobian = Matrix3::from_columns(&sw.d_moment_residual);
         let step = if mu == T::zero() {
@@ -209,15 +226,32 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
         } else {
             let jtj = jacobian.tr_mul(&jacobian);
             let damped = jtj + Matrix3::from_diagonal(&jtj.diagonal()) * mu;
-            damped.cholesky().map(|c| c.solve(&-jacobian.tr_mul(&sw.moment_residual_nm)))
+            damped
+                .cholesky()
+                .map(|c| c.solve(&-jacobian.tr_mul(&sw.moment_residual_nm)))
         };
         let Some(mut step) = step.filter(|d| d.iter().all(|x| x.is_finite())) else {
             if mu == T::zero() {
                 mu = T::lit(1e-3);
                 continue;
             }
-            return Newton { u0, sweep: sw, residual, termination: Termination::Singular };
+            return Newton {
+                u0,
+                sweep: sw,
+                residual,
+                termination: Termination::Singular,
+            };
         };
+        // At the rounding floor the residual stops decreasing; a Newton correction that turns the base
+        // by less than the tolerance means the answer is as good as the scalar type allows.
+        if mu == T::zero() && model.step_converged(&step, &u0, settings.tolerance) {
+            return Newton {
+                u0,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
+        }
         let norm = step.norm();
         if norm > max_step {
             step *= max_step / norm;
@@ -225,7 +259,11 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
         work.iterations = work.iterations.saturating_add(1);
         let trial_u = u0 + step;
         let trial = run(&trial_u, work);
-        let trial_residual = if trial.finite { model.moment_residual(&trial.moment_residual_nm) } else { residual };
+        let trial_residual = if trial.finite {
+            model.moment_residual(&trial.moment_residual_nm)
+        } else {
+            residual
+        };
         if trial.finite && trial_residual < residual {
             (u0, sw, residual) = (trial_u, trial, trial_residual);
             mu *= T::lit(0.25);
@@ -234,16 +272,39 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
             }
             rejections = 0;
         } else {
-            mu = if mu == T::zero() { T::lit(1e-3) } else { mu * T::lit(8.0) };
+            mu = if mu == T::zero() {
+                T::lit(1e-3)
+            } else {
+                mu * T::lit(8.0)
+            };
             rejections += 1;
             if rejections >= MAX_REJECTIONS {
-                let termination = if residual <= settings.tolerance { Termination::Converged } else { Termination::Stalled };
-                return Newton { u0, sweep: sw, residual, termination };
+                let termination =
+                    if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
+                        Termination::Converged
+                    } else {
+                        Termination::Stalled
+                    };
+                return Newton {
+                    u0,
+                    sweep: sw,
+                    residual,
+                    termination,
+                };
             }
         }
     }
-    let termination = if residual <= settings.tolerance { Termination::Converged } else { Termination::IterationLimit };
-    Newton { u0, sweep: sw, residual, termination }
+    let termination = if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
+        Termination::Converged
+    } else {
+        Termination::IterationLimit
+    };
+    Newton {
+        u0,
+        sweep: sw,
+        residual,
+        termination,
+    }
 }
 
 /// Load continuation from the unloaded rod (where `u(0) = 0` is exact) to the full load.
@@ -278,10 +339,20 @@ pub(crate) fn continuation<T: Scalar, A: Attitude<T>>(
         };
         *load_steps = load_steps.saturating_add(1);
         let iterations_before = work.iterations;
-        let out = newton(model, load, target, guess, &tracked, corrector_iterations, work);
+        let out = newton(
+            model,
+            load,
+            target,
+            guess,
+            &tracked,
+            corrector_iterations,
+            work,
+        );
         let accepted = out.termination.is_success()
             && (out.u0 - guess).norm() <= trust
-            && out.stability(model.conservative(&load.moment_nm), model.length_m()).is_acceptable();
+            && out
+                .stability(model.conservative(&load.moment_nm), model.length_m())
+                .is_acceptable();
         if accepted {
             (prev_alpha, prev_u0) = (alpha, u0);
             (alpha, u0) = (target, out.u0);
@@ -327,8 +398,16 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
                 let guess = self.linear_guess(load, T::one());
                 let angle = guess.norm() * self.length_m();
                 let limit = T::lit(GUESS_ANGLE_RAD);
-                let scale = if angle > limit { limit / angle } else { T::one() };
-                (guess * scale, settings.max_iterations.min(DIRECT_ITERATIONS), scale.min(T::lit(0.5)))
+                let scale = if angle > limit {
+                    limit / angle
+                } else {
+                    T::one()
+                };
+                (
+                    guess * scale,
+                    settings.max_iterations.min(DIRECT_ITERATIONS),
+                    scale.min(T::lit(0.5)),
+                )
             }
             Start::Warm(u) => (u, settings.max_iterations, T::lit(0.25)),
         };
@@ -344,23 +423,34 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
             }
         };
         let mut result = Some({
-            let mut out = newton(self, load, T::one(), direct_start, settings, direct_iterations, &mut work);
+            let mut out = newton(
+                self,
+                load,
+                T::one(),
+                direct_start,
+                settings,
+                direct_iterations,
+                &mut work,
+            );
             let stability = check(&mut out);
             (out, stability)
         });
         let cold_allowed = matches!(start, Start::Cold) || settings.cold_fallback;
-        let succeeded = result.as_ref().is_some_and(|(out, _)| out.termination.is_success());
+        let succeeded = result
+            .as_ref()
+            .is_some_and(|(out, _)| out.termination.is_success());
         if !succeeded && cold_allowed {
-            result = match continuation(self, load, settings, first_step, &mut work, &mut load_steps) {
-                Some(mut out) => {
-                    let stability = check(&mut out);
-                    Some((out, stability))
-                }
-                None => result.map(|(mut out, stability)| {
-                    out.termination = Termination::ContinuationFailed;
-                    (out, stability)
-                }),
-            };
+            result =
+                match continuation(self, load, settings, first_step, &mut work, &mut load_steps) {
+                    Some(mut out) => {
+                        let stability = check(&mut out);
+                        Some((out, stability))
+                    }
+                    None => result.map(|(mut out, stability)| {
+                        out.termination = Termination::ContinuationFailed;
+                        (out, stability)
+                    }),
+                };
         }
         let Some((outcome, stability)) = result else {
             return Ok(self.failed(load, Termination::ContinuationFailed, work, load_steps));
@@ -388,7 +478,13 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
         })
     }
 
-    fn failed(&self, load: &TipLoad<T>, termination: Termination, work: Work, load_steps: u16) -> Equilibrium<T> {
+    fn failed(
+        &self,
+        load: &TipLoad<T>,
+        termination: Termination,
+        work: Work,
+        load_steps: u16,
+    ) -> Equilibrium<T> {
         Equilibrium {
             base_strain_per_m: Vector3::zeros(),
             load: *load,

@@ -61,7 +61,11 @@ pub(crate) fn classify<T: Scalar>(
         return Stability::ConjugatePoint(s);
     }
     // W = M H^-1, i.e. W^T = H^-T M^T: solve H^T W^T = M^T.
-    let Some(w_t) = tip_rotation_tangent.transpose().lu().solve(&jacobian.transpose()) else {
+    let Some(w_t) = tip_rotation_tangent
+        .transpose()
+        .lu()
+        .solve(&jacobian.transpose())
+    else {
         return Stability::ConjugatePoint(length_m);
     };
     let symmetric = (w_t + w_t.transpose()) * T::lit(0.5);

@@ -17,7 +17,9 @@ pub(crate) fn strain_after<T: Scalar>(
     tau_local: &Vector3<T>,
     u: &Vector3<T>,
 ) -> Vector3<T> {
-    distal.c_inv.component_mul(&(proximal.c.component_mul(u) - tau_local))
+    distal
+        .c_inv
+        .component_mul(&(proximal.c.component_mul(u) - tau_local))
 }
 
 /// The same jump for a perturbation `(d_theta, d_u)`: `d(R^T tau) = (R^T tau) x d_theta`.
@@ -29,5 +31,7 @@ pub(crate) fn strain_tangent_after<T: Scalar>(
     d_theta: &Vector3<T>,
     d_u: &Vector3<T>,
 ) -> Vector3<T> {
-    distal.c_inv.component_mul(&(proximal.c.component_mul(d_u) - tau_local.cross(d_theta)))
+    distal
+        .c_inv
+        .component_mul(&(proximal.c.component_mul(d_u) - tau_local.cross(d_theta)))
 }

@@ -9,8 +9,8 @@
 //! tolerance if it were missing).
 
 use model_core::{
-    CrossSection, GuideMass, Material, Model, PointLoad, Rod, Scalar, Section, ShapePoint, ShootingSettings, Start,
-    Stiffness, TipLoad,
+    CrossSection, GuideMass, Material, Model, PointLoad, Rod, Scalar, Section, ShapePoint,
+    ShootingSettings, Start, Stiffness, TipLoad,
 };
 use nalgebra::Vector3;
 
@@ -20,7 +20,11 @@ const YOUNGS_PA: f64 = 62.7e9;
 
 fn stiffness<T: Scalar>() -> Stiffness<T> {
     let material = Material::isotropic(T::lit(YOUNGS_PA), T::lit(0.3)).unwrap();
-    Stiffness::from_material(&material, &CrossSection::solid_circle(T::lit(DIAMETER_M)).unwrap()).unwrap()
+    Stiffness::from_material(
+        &material,
+        &CrossSection::solid_circle(T::lit(DIAMETER_M)).unwrap(),
+    )
+    .unwrap()
 }
 
 fn bending_stiffness() -> f64 {
@@ -49,7 +53,9 @@ fn rod<T: Scalar>(sections: usize, steps: u16, line_density: f64) -> Rod<T> {
 }
 
 fn tip<T: Scalar>(model: &Model<T>, load: &TipLoad<T>) -> Vector3<f64> {
-    let eq = model.solve(load, Start::Cold, &ShootingSettings::default()).unwrap();
+    let eq = model
+        .solve(load, Start::Cold, &ShootingSettings::default())
+        .unwrap();
     assert!(eq.report.termination.is_success(), "{:?}", eq.report);
     eq.tip_position_m.map(Scalar::to_f64)
 }
@@ -58,10 +64,17 @@ fn cantilever_tip_load<T: Scalar>(load_ratio: f64, rel_tol: f64) {
     let model = Model::<T>::new(rod(1, 50, 0.0)).unwrap();
     let ei = bending_stiffness();
     let force = load_ratio * ei / (LENGTH_M * LENGTH_M); // P L^2 / EI
-    let tip = tip(&model, &TipLoad::force(Vector3::new(T::zero(), T::lit(-force), T::zero())));
+    let tip = tip(
+        &model,
+        &TipLoad::force(Vector3::new(T::zero(), T::lit(-force), T::zero())),
+    );
     let expected = -force * LENGTH_M.powi(3) / (3.0 * ei) - force * LENGTH_M / shear_stiffness();
     let err = (tip.y - expected).abs() / expected.abs();
-    assert!(err < rel_tol, "tip deflection {} vs P L^3 / 3EI + P L / GA = {expected} (rel err {err:e})", tip.y);
+    assert!(
+        err < rel_tol,
+        "tip deflection {} vs P L^3 / 3EI + P L / GA = {expected} (rel err {err:e})",
+        tip.y
+    );
 }
 
 #[test]
@@ -79,9 +92,14 @@ fn cantilever_uniform_weight<T: Scalar>(load_ratio: f64, rel_tol: f64) {
     r.gravity_m_s2 = Vector3::new(T::zero(), T::lit(-9.81), T::zero());
     let model = Model::<T>::new(r).unwrap();
     let tip = tip(&model, &TipLoad::zero());
-    let expected = -weight_per_m * LENGTH_M.powi(4) / (8.0 * ei) - weight_per_m * LENGTH_M.powi(2) / (2.0 * shear_stiffness());
+    let expected = -weight_per_m * LENGTH_M.powi(4) / (8.0 * ei)
+        - weight_per_m * LENGTH_M.powi(2) / (2.0 * shear_stiffness());
     let err = (tip.y - expected).abs() / expected.abs();
-    assert!(err < rel_tol, "tip deflection {} vs w L^4 / 8EI + w L^2 / 2GA = {expected} (rel err {err:e})", tip.y);
+    assert!(
+        err < rel_tol,
+        "tip deflection {} vs w L^4 / 8EI + w L^2 / 2GA = {expected} (rel err {err:e})",
+        tip.y
+    );
 }
 
 #[test]
@@ -98,21 +116,43 @@ fn pure_moment_is_a_circle<T: Scalar>(tol_m: f64) {
     let angle = 1.5 * core::f64::consts::PI;
     let moment = angle * ei / LENGTH_M;
     let load = TipLoad::moment(Vector3::new(T::zero(), T::zero(), T::lit(moment)));
-    let eq = model.solve(&load, Start::Cold, &ShootingSettings::default()).unwrap();
+    let eq = model
+        .solve(&load, Start::Cold, &ShootingSettings::default())
+        .unwrap();
     assert!(eq.report.termination.is_success(), "{:?}", eq.report);
     let radius = ei / moment;
     // Check the whole arc, not only the tip.
-    let s: Vec<T> = (0..=10).map(|i| T::lit(LENGTH_M * i as f64 / 10.0)).collect();
-    let mut out = vec![ShapePoint { s_m: T::zero(), position_m: Vector3::zeros(), rotation: nalgebra::Matrix3::identity(), strain_per_m: Vector3::zeros() }; s.len()];
+    let s: Vec<T> = (0..=10)
+        .map(|i| T::lit(LENGTH_M * i as f64 / 10.0))
+        .collect();
+    let mut out = vec![
+        ShapePoint {
+            s_m: T::zero(),
+            position_m: Vector3::zeros(),
+            rotation: nalgebra::Matrix3::identity(),
+            strain_per_m: Vector3::zeros()
+        };
+        s.len()
+    ];
     assert_eq!(model.shape(&eq, &s, &mut out).unwrap(), s.len());
     for p in &out {
         let phi = p.s_m.to_f64() / radius;
         let expected = Vector3::new(radius * phi.sin(), radius * (1.0 - phi.cos()), 0.0);
         let err = (p.position_m.map(Scalar::to_f64) - expected).norm();
-        assert!(err < tol_m, "at s = {}: {:?} vs arc {:?} (err {err:e} m)", p.s_m.to_f64(), p.position_m, expected);
+        assert!(
+            err < tol_m,
+            "at s = {}: {:?} vs arc {:?} (err {err:e} m)",
+            p.s_m.to_f64(),
+            p.position_m,
+            expected
+        );
         let tangent = p.tangent().map(Scalar::to_f64);
         let tangent_err = (tangent - Vector3::new(phi.cos(), phi.sin(), 0.0)).norm();
-        assert!(tangent_err < tol_m / LENGTH_M * 10.0, "tangent at s = {}: err {tangent_err:e}", p.s_m.to_f64());
+        assert!(
+            tangent_err < tol_m / LENGTH_M * 10.0,
+            "tangent at s = {}: err {tangent_err:e}",
+            p.s_m.to_f64()
+        );
     }
 }
 
@@ -126,10 +166,17 @@ fn axial_load_extends_by_fl_over_ea<T: Scalar>(rel_tol: f64) {
     let model = Model::<T>::new(rod(1, 20, 0.0)).unwrap();
     let ea = stiffness::<f64>().shear_axial_n.z;
     let force = 50.0;
-    let tip = tip(&model, &TipLoad::force(Vector3::new(T::lit(force), T::zero(), T::zero())));
+    let tip = tip(
+        &model,
+        &TipLoad::force(Vector3::new(T::lit(force), T::zero(), T::zero())),
+    );
     let expected = force * LENGTH_M / ea;
     let err = ((tip.x - LENGTH_M) - expected).abs() / expected;
-    assert!(err < rel_tol, "extension {} vs F L / EA = {expected} (rel err {err:e})", tip.x - LENGTH_M);
+    assert!(
+        err < rel_tol,
+        "extension {} vs F L / EA = {expected} (rel err {err:e})",
+        tip.x - LENGTH_M
+    );
 }
 
 #[test]
