@@ -85,6 +85,10 @@ struct Tangent<T> {
 #[derive(Clone, Copy, Debug)]
 struct Point<T: Scalar, A, const K: usize> {
     r: Vector3<T>,
+    /// The low-order part of the position (compensated summation): the position is `r + r_lo`.
+    /// `r` never feeds back into the right-hand side, so this costs a few additions per step and
+    /// keeps f32 positions, and the chords between them, free of accumulated rounding.
+    r_lo: Vector3<T>,
     att: A,
     u: Vector3<T>,
     tan: [Tangent<T>; K],
@@ -165,6 +169,7 @@ fn stage<T: Scalar, A: Attitude<T>, const K: usize>(
 ) -> Point<T, A, K> {
     Point {
         r: p.r + k.r * h,
+        r_lo: p.r_lo,
         att: A::stage(&p.att, &k.att, h),
         u: p.u + k.u * h,
         tan: add_tangents(&p.tan, &k.tan, h),
@@ -199,20 +204,39 @@ fn rk4_step<T: Scalar, A: Attitude<T>, const K: usize>(
             u: p.tan[j].u + d.u,
         }
     });
+    let (r, lo) = compensated_add(&p.r, &((k1.r + k4.r) * w1 + (k2.r + k3.r) * w2));
     Point {
-        r: p.r + (k1.r + k4.r) * w1 + (k2.r + k3.r) * w2,
+        r,
+        r_lo: p.r_lo + lo,
         att: A::combine(&p.att, &[k1.att, k2.att, k3.att, k4.att], h),
         u: p.u + (k1.u + k4.u) * w1 + (k2.u + k3.u) * w2,
         tan,
     }
 }
 
+/// `a + b` rounded, and the rounding error (Neumaier's two-sum, per component).
+#[inline]
+fn compensated_add<T: Scalar>(a: &Vector3<T>, b: &Vector3<T>) -> (Vector3<T>, Vector3<T>) {
+    let sum = a + b;
+    let lo = Vector3::from_fn(|i, _| {
+        let (x, y, t) = (a[i], b[i], sum[i]);
+        if x.abs() >= y.abs() {
+            (x - t) + y
+        } else {
+            (y - t) + x
+        }
+    });
+    (sum, lo)
+}
+
 /// A cable's running length and its tangents.
 #[derive(Clone, Copy, Debug)]
 struct CableTrace<T, const K: usize> {
     length_m: T,
+    length_lo: T,
     d_length: [T; K],
-    prev: Vector3<T>,
+    /// The previous hole: the backbone point (high and low parts) and the offset `R d`.
+    prev: (Vector3<T>, Vector3<T>, Vector3<T>),
     d_prev: [Vector3<T>; K],
     started: bool,
     done: bool,
@@ -222,8 +246,9 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     fn new() -> Self {
         Self {
             length_m: T::zero(),
+            length_lo: T::zero(),
             d_length: [T::zero(); K],
-            prev: Vector3::zeros(),
+            prev: (Vector3::zeros(), Vector3::zeros(), Vector3::zeros()),
             d_prev: [Vector3::zeros(); K],
             started: false,
             done: false,
@@ -231,19 +256,28 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     }
 
     /// Adds the chord to the hole at `r + R d` (thesis ch. 3.8.1: cable length is the sum of chords).
+    /// The chord is formed from differences of like parts (high, low, offset), so no part of the
+    /// 40 cm position is lost to cancellation, and the lengths are summed with compensation.
     fn add_hole(
         &mut self,
-        r: &Vector3<T>,
+        r: (&Vector3<T>, &Vector3<T>),
         m: &Matrix3<T>,
         tan: &[Tangent<T>; K],
         offset: &Vector3<T>,
     ) {
-        let hole = r + m * offset;
+        let arm = m * offset;
+        let hole = (*r.0, *r.1, arm);
         let d_hole: [Vector3<T>; K] = array::from_fn(|j| tan[j].r + m * tan[j].th.cross(offset));
         if self.started {
-            let chord = hole - self.prev;
+            let chord = (hole.0 - self.prev.0) + (hole.1 - self.prev.1) + (hole.2 - self.prev.2);
             let len = chord.norm_squared().sqrt_hot();
-            self.length_m += len;
+            let sum = self.length_m + len;
+            self.length_lo += if self.length_m.abs() >= len.abs() {
+                (self.length_m - sum) + len
+            } else {
+                (len - sum) + self.length_m
+            };
+            self.length_m = sum;
             if len > T::zero() {
                 for ((d_length, d_hole), d_prev) in
                     self.d_length.iter_mut().zip(&d_hole).zip(&self.d_prev)
@@ -332,7 +366,7 @@ fn shape_point<T: Scalar, A: Attitude<T>, const K: usize>(
 ) -> ShapePoint<T> {
     ShapePoint {
         s_m: s,
-        position_m: p.r,
+        position_m: p.r + p.r_lo,
         rotation: p.att.matrix(),
         strain_per_m: p.u,
     }
@@ -353,6 +387,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
     let dn: [Vector3<T>; K] = array::from_fn(|j| seeds[j].dforce_n * alpha);
     let mut p: Point<T, A, K> = Point {
         r: rod.base_position_m,
+        r_lo: Vector3::zeros(),
         att: *model.base_attitude(),
         u: inputs.u0,
         tan: array::from_fn(|j| Tangent {
@@ -379,13 +414,13 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
             if node.guide != NO_GUIDE {
                 for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
                     if !trace.done {
-                        trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
+                        trace.add_hole((&p.r, &p.r_lo), &m, &p.tan, &offsets[c]);
                     }
                 }
             }
             for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
                 if node.cable_ends & (1u8 << c) != 0 && !trace.done {
-                    trace.add_hole(&p.r, &m, &p.tan, &offsets[c]);
+                    trace.add_hole((&p.r, &p.r_lo), &m, &p.tan, &offsets[c]);
                     trace.done = true;
                 }
             }
@@ -431,6 +466,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
                 while let Some(q) = sink.next_query().filter(|q| *q < s_next) {
                     let here = Point::<T, A, 0> {
                         r: p.r,
+                        r_lo: p.r_lo,
                         att: p.att,
                         u: p.u,
                         tan: [],
@@ -473,7 +509,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
     };
     let tau_local = m.tr_mul(&(tip_moment_nm * alpha));
     let mut out = Sweep {
-        tip_position_m: p.r,
+        tip_position_m: p.r + p.r_lo,
         tip_rotation: m,
         moment_residual_nm: comp.c.component_mul(&p.u) - tau_local,
         d_moment_residual: array::from_fn(|j| {
@@ -488,7 +524,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
         finite: true,
     };
     for (c, trace) in cables.iter().enumerate() {
-        out.cable_m[c] = trace.length_m;
+        out.cable_m[c] = trace.length_m + trace.length_lo;
         out.d_cable[c] = trace.d_length;
     }
     let finite = crate::scalar::all_finite(&out.moment_residual_nm)

@@ -125,7 +125,8 @@ pub struct InverseSettings<T> {
     pub tolerance: T,
     /// Cable mismatch below which the fit is exact, m.
     pub length_tolerance_m: T,
-    /// A step that moves the fit by less than this many standard deviations ends the solve.
+    /// A step that moves the fit (data and prior) by less than this many standard deviations, and the
+    /// tip by less than `tip_tolerance_m`, ends the solve. Raised to what the scalar type resolves.
     pub step_tolerance_sigma: T,
     /// Standard deviation of one cable-length measurement, m (for an encoder of resolution `q`,
     /// `q / sqrt(12)`; see [`InverseSettings::with_resolution`]).
@@ -137,20 +138,33 @@ pub struct InverseSettings<T> {
     pub max_rotation_step_rad: T,
     /// Check the stability of the answer (free: uses the tangents already computed).
     pub check_stability: bool,
+    /// The solve stops when the next step would move the tip by less than this, m (and the fit by
+    /// less than `step_tolerance_sigma`). Raised to what the scalar type resolves: `4 L` times the
+    /// default shooting tolerance (37 um for f32 on a 39 cm rod).
+    pub tip_tolerance_m: T,
+    /// A priori standard deviation of each load parameter, in units of the rod's buckling scale
+    /// (`E I / L^2` for a force, `E I / L` for a moment); infinity for none. With a prior the answer is
+    /// the maximum a posteriori estimate: it keeps a direction the cables barely see (an axial force,
+    /// whose effect near buckling is strongly nonlinear) from wandering to one of several far-apart
+    /// fits, and changes well-determined directions negligibly. The identifiability figures in
+    /// [`Quality`] (singular values, condition number, [`Determination`]) stay those of the data alone.
+    pub prior_std_scale: T,
 }
 
 impl<T: Scalar> Default for InverseSettings<T> {
     fn default() -> Self {
         let eps = T::default_epsilon();
         Self {
-            max_iterations: 40,
+            max_iterations: 60,
             tolerance: default_tolerance(),
             length_tolerance_m: (eps * T::lit(10.0)).max(T::lit(1e-12)),
-            step_tolerance_sigma: eps.sqrt(),
+            step_tolerance_sigma: T::lit(1e-4),
             length_std_m: T::lit(1e-6),
             max_force_std_n: T::lit(0.05),
             max_rotation_step_rad: T::lit(1.0),
             check_stability: true,
+            tip_tolerance_m: T::lit(1e-7),
+            prior_std_scale: T::lit(10.0),
         }
     }
 }
@@ -171,6 +185,11 @@ impl<T: Scalar> InverseSettings<T> {
         positive(self.length_std_m, "length standard deviation")?;
         positive(self.max_force_std_n, "force standard deviation limit")?;
         positive(self.max_rotation_step_rad, "trust region")?;
+        positive(self.tip_tolerance_m, "tip tolerance")?;
+        // Infinity (no prior) is allowed; NaN, zero and negative are not.
+        if self.prior_std_scale.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
+            return Err(ModelError::NotPositive("prior standard deviation"));
+        }
         Ok(())
     }
 }
@@ -295,17 +314,91 @@ struct Point<T, const P: usize> {
     p: SVector<T, P>,
 }
 
+#[derive(Clone, Copy)]
 struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize> {
     model: &'a Model<T, A>,
     basis: LoadBasis<T, P>,
     measured: CableVector<T>,
     settings: InverseSettings<T>,
     cables: usize,
-    /// Largest cable offset, m: a tip-moment error of angle `a` changes a cable length by about `a r`.
-    radius_m: T,
+    /// `1 / prior std` of each parameter (zero: no prior).
+    prior_weight: SVector<T, P>,
+    /// The largest tip-moment residual (dimensionless) at which the reduced model is trusted: its
+    /// second-order cable error, about `r e^2`, stays below a tenth of a standard deviation.
+    max_moment_residual: T,
 }
 
-impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
+impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
+    fn new(
+        model: &'a Model<T, A>,
+        basis: LoadBasis<T, P>,
+        measured: CableVector<T>,
+        settings: InverseSettings<T>,
+    ) -> Self {
+        Self {
+            model,
+            basis,
+            measured,
+            settings,
+            cables: model.rod().cables.len(),
+            prior_weight: prior_weight(model, &basis, &settings),
+            max_moment_residual: {
+                let radius = model
+                    .rod()
+                    .cables
+                    .iter()
+                    .fold(T::zero(), |r, c| r.max(c.radius_m));
+                (settings.length_std_m * T::lit(0.1) / radius).sqrt()
+            },
+        }
+    }
+
+    /// Brings a point back onto the equilibrium at its load when its tip-moment residual is too large
+    /// for the reduced model: Newton steps on the base strain alone (variable projection). Returns the
+    /// projected point and its linearisation, or `None` if that does not converge.
+    fn project(
+        &self,
+        mut x: Point<T, P>,
+        mut lin: Linearization<T, P>,
+        work: &mut crate::shooting::Work,
+    ) -> Option<(Point<T, P>, Linearization<T, P>)> {
+        for _ in 0..8 {
+            if self.model.moment_residual(&lin.e) <= self.max_moment_residual {
+                return Some((x, lin));
+            }
+            let mut du = lin.j_eu.lu().solve(&-lin.e)?;
+            let turn = du.norm() * self.model.length_m();
+            if turn > self.settings.max_rotation_step_rad {
+                du *= self.settings.max_rotation_step_rad / turn;
+            }
+            x.u0 += du;
+            work.sweeps = work.sweeps.saturating_add(1);
+            let sw = self.full_sweep(&x);
+            if !sw.finite {
+                return None;
+            }
+            lin = self.linearize(&x, &sw);
+        }
+        (self.model.moment_residual(&lin.e) <= self.max_moment_residual).then_some((x, lin))
+    }
+
+    /// The same problem with other prior weights.
+    fn with_prior(&self, prior_weight: SVector<T, P>) -> Self {
+        Self {
+            prior_weight,
+            ..*self
+        }
+    }
+
+    /// The graduated prior's weights at relaxation `relax` (1 at the start, halving): the start weights
+    /// scaled down, but never below the final prior's; tiny ones become the final ones.
+    fn graduated(&self, start: &SVector<T, P>, relax: T) -> SVector<T, P> {
+        if relax < T::lit(1e-6) {
+            return self.prior_weight;
+        }
+        start.zip_map(&self.prior_weight, |s, f| (s * relax).max(f))
+    }
+
     fn full_sweep(&self, x: &Point<T, P>) -> Sweep<T, 6> {
         let load = self.basis.load(&x.p);
         sweep::<T, A, 6>(
@@ -403,36 +496,98 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         ok.then_some(Reduced { a, b, g, c })
     }
 
-    /// The merit the step must decrease: squared cable mismatch in standard deviations, plus the
-    /// tip-moment error converted to the cable-length change it would cause.
-    fn merit(&self, e: &Vector3<T>, rc: &CableVector<T>) -> T {
-        let moment_as_length =
-            self.model.moment_residual(e) * self.radius_m / self.settings.length_std_m;
-        rc.norm_squared() / (self.settings.length_std_m * self.settings.length_std_m)
-            + moment_as_length * moment_as_length
+    /// The merit a step must decrease: the squared cable mismatch, in standard deviations, left once
+    /// the tip-moment condition is restored to first order (`|c~|^2` of the reduced system, which
+    /// the step minimises), plus the prior's `|p / prior std|^2`. Judging the full residual instead
+    /// would let the moment condition's curvature veto steps along a weakly determined direction.
+    fn merit(&self, p: &SVector<T, P>, lin: &Linearization<T, P>) -> T {
+        self.reduce(lin).map_or_else(
+            || T::max_value().unwrap_or_else(T::one),
+            |red| red.c.norm_squared() + p.component_mul(&self.prior_weight).norm_squared(),
+        )
     }
 
-    /// The damped reduced step, limited by the trust region.
-    fn step(&self, red: &Reduced<T, P>, mu: T) -> Option<(Vector3<T>, SVector<T, P>)> {
-        let normal = red.g.tr_mul(&red.g);
-        let gradient = red.g.tr_mul(&red.c);
+    /// Whether the equilibrium at a linearisation may be accepted: not found unstable (an unstable
+    /// equilibrium is not a physical answer, and a step onto one is rejected like a failed step).
+    fn acceptable(&self, p: &SVector<T, P>, lin: &Linearization<T, P>) -> bool {
+        !self.settings.check_stability || self.stability(p, lin).is_acceptable()
+    }
+
+    fn stability(&self, p: &SVector<T, P>, lin: &Linearization<T, P>) -> Stability<T> {
+        let conservative = self.model.conservative(&self.basis.load(p).moment_nm);
+        classify(
+            conservative,
+            lin.conjugate_point_m,
+            &lin.j_eu,
+            &lin.d_theta_tip_u,
+            self.model.length_m(),
+        )
+    }
+
+    /// The merit decrease the linear model predicts for a step `dp` from `p`.
+    fn predicted_decrease(&self, red: &Reduced<T, P>, p: &SVector<T, P>, dp: &SVector<T, P>) -> T {
+        let w = &self.prior_weight;
+        red.c.norm_squared() + p.component_mul(w).norm_squared()
+            - (red.c + red.g * dp).norm_squared()
+            - (p + dp).component_mul(w).norm_squared()
+    }
+
+    /// The information matrix `G^T G / s^2 + W^2` (data and prior).
+    fn information(&self, red: &Reduced<T, P>) -> SMatrix<T, P, P> {
+        let w2 = self.prior_weight.component_mul(&self.prior_weight);
+        red.g.tr_mul(&red.g) + SMatrix::from_diagonal(&w2)
+    }
+
+    /// The damped step from `p` (`mu = 0`: Gauss-Newton), limited by the trust region on the base
+    /// rotation. The base-strain change has two parts: `-J_eu^-1 e`, which restores the tip-moment
+    /// condition at the current load, and `-J_eu^-1 J_ep dp`, which follows the load step. The trust
+    /// region shortens the load step first; shortening the first part too would leave the iterate off
+    /// the equilibrium, where the reduced model no longer describes the problem.
+    fn step(
+        &self,
+        red: &Reduced<T, P>,
+        p: &SVector<T, P>,
+        mu: T,
+    ) -> Option<(Vector3<T>, SVector<T, P>)> {
+        let normal = self.information(red);
+        let w2 = self.prior_weight.component_mul(&self.prior_weight);
+        let gradient = red.g.tr_mul(&red.c) + w2.component_mul(p);
         // A tiny ridge keeps an undetermined direction from blowing the step up; LM damping on top.
         let ridge = normal.diagonal().max().max(T::one()) * T::default_epsilon() * T::lit(16.0);
         let damped = normal + SMatrix::from_diagonal(&(normal.diagonal() * mu).add_scalar(ridge));
         let dp = damped.cholesky()?.solve(&-gradient);
-        let mut du = -(red.b + red.a * dp);
-        let mut dp = dp;
-        let norm = du.norm() * self.model.length_m();
-        if norm > self.settings.max_rotation_step_rad {
-            let scale = self.settings.max_rotation_step_rad / norm;
-            du *= scale;
-            dp *= scale;
-        }
+        let length = self.model.length_m();
+        let limit = self.settings.max_rotation_step_rad;
+        let restore = -red.b;
+        let follow = -(red.a * dp);
+        let (du, dp) = if (restore + follow).norm() * length <= limit {
+            (restore + follow, dp)
+        } else if restore.norm() * length >= limit {
+            (
+                restore * (limit / (restore.norm() * length)),
+                SVector::zeros(),
+            )
+        } else {
+            // The largest fraction k of the load step with |restore + k follow| L <= limit.
+            let (a, b, c) = (
+                follow.norm_squared(),
+                restore.dot(&follow),
+                restore.norm_squared() - (limit / length) * (limit / length),
+            );
+            let k = if a > T::zero() {
+                ((b * b - a * c).max(T::zero()).sqrt() - b) / a
+            } else {
+                T::zero()
+            };
+            let k = k.max(T::zero()).min(T::one());
+            (restore + follow * k, dp * k)
+        };
         let finite = crate::scalar::all_finite(&du) && crate::scalar::all_finite(&dp);
         finite.then_some((du, dp))
     }
 
-    /// The fit's quality from the reduced system.
+    /// The fit's quality: identifiability from the data alone (singular values of `G`), uncertainty
+    /// from data and prior together.
     fn quality(&self, lin: &Linearization<T, P>, red: Option<&Reduced<T, P>>) -> Quality<T, P>
     where
         Params: ParamCount<T, P>,
@@ -477,14 +632,23 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
         quality.weakest_direction = v.column(weakest).into_owned();
         let rank_deficient =
             smallest <= largest * T::default_epsilon() * T::lit(100.0) || largest == T::zero();
-        if rank_deficient {
-            return quality;
+        if !rank_deficient {
+            quality.condition_number = largest / smallest;
         }
-        quality.condition_number = largest / smallest;
-        // Covariance of p: (G^T G / s^2)^-1 = V diag(1 / sigma^2) V^T.
-        let covariance = v
-            * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
-            * v.transpose();
+        // Covariance of p: the inverse information, V diag(1 / sigma^2) V^T from the data alone when
+        // there is no prior.
+        let covariance = if self.prior_weight.iter().all(|w| *w == T::zero()) {
+            if rank_deficient {
+                return quality;
+            }
+            v * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
+                * v.transpose()
+        } else {
+            match self.information(red).cholesky() {
+                Some(c) => c.inverse(),
+                None => return quality,
+            }
+        };
         quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
         let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
         quality.force_std_n = force_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
@@ -497,7 +661,9 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
             .force_std_n
             .max()
             .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
-        quality.determination = if residual_rms_sigma > T::lit(3.0) {
+        quality.determination = if rank_deficient {
+            Determination::Undetermined
+        } else if residual_rms_sigma > T::lit(3.0) {
             Determination::Inconsistent
         } else if worst > self.settings.max_force_std_n {
             Determination::Weak
@@ -508,18 +674,29 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
     }
 
     /// The smallest fit change, in standard deviations, the scalar type can resolve: cable lengths are
-    /// sums of chords about as long as the rod, so their rounding is a few `eps L`.
+    /// sums of chords about as long as the rod, rounded to about `2 eps L`.
     fn fit_floor_sigma(&self) -> T {
-        T::default_epsilon() * T::lit(16.0) * self.model.length_m() / self.settings.length_std_m
+        T::default_epsilon() * T::lit(2.0) * self.model.length_m() / self.settings.length_std_m
     }
 
+    /// Converged when the tip-moment condition holds and the rest of the way is negligible: the next
+    /// Gauss-Newton step, plus what the steps still to come would add when the iteration converges
+    /// only linearly (`step q / (1 - q)` for a contraction `q` from the previous step's tip move),
+    /// would move the tip by less than the tip tolerance, and the fit (data and prior, in standard
+    /// deviations) by less than the step tolerance. Both tolerances are raised to what the scalar type
+    /// resolves. Returns the verdict and the step's tip move.
     fn converged(
         &self,
         x: &Point<T, P>,
         lin: &Linearization<T, P>,
-        step: Option<&(Vector3<T>, SVector<T, P>)>,
         red: &Reduced<T, P>,
-    ) -> bool {
+        previous_tip_move: Option<T>,
+    ) -> (bool, T) {
+        let infinite = T::max_value().unwrap_or_else(T::one);
+        let Some((du, dp)) = self.step(red, &x.p, T::zero()) else {
+            return (false, infinite);
+        };
+        let tip_move = (lin.d_tip_u * du + lin.d_tip_p * dp).norm();
         // The tip-moment condition holds when its residual is small or, at the rounding floor, when
         // the correction it asks for (`J_eu^-1 e`) is negligible.
         let moment_ok = self
@@ -528,18 +705,59 @@ impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P> {
             || self
                 .model
                 .step_converged(&red.b, &x.u0, self.settings.tolerance);
-        if !moment_ok {
-            return false;
-        }
-        if lin.rc.amax() <= self.settings.length_tolerance_m {
-            return true;
-        }
-        let tolerance = self
+        let remaining = match previous_tip_move {
+            Some(previous) if previous > T::zero() && tip_move < previous => {
+                let q = tip_move / previous;
+                tip_move * q / (T::one() - q)
+            }
+            Some(_) => infinite,
+            None => T::zero(),
+        };
+        // f32 resolves the tip to about the shooting tolerance (an angle) times the rod length.
+        let tip_floor = self.model.length_m() * default_tolerance::<T>();
+        let fit_move = (dp.transpose() * self.information(red) * dp)
+            .x
+            .max(T::zero())
+            .sqrt();
+        let fit_tolerance = self
             .settings
             .step_tolerance_sigma
             .max(self.fit_floor_sigma());
-        step.is_some_and(|(_, dp)| (red.g * dp).norm() <= tolerance)
+        let done = moment_ok
+            && tip_move + remaining <= self.settings.tip_tolerance_m.max(tip_floor)
+            && fit_move <= fit_tolerance;
+        (done, tip_move)
     }
+}
+
+/// `1 / prior std` for each parameter of `basis` (zero when the prior scale is infinite).
+fn prior_weight<T: Scalar, A: Attitude<T>, const P: usize>(
+    model: &Model<T, A>,
+    basis: &LoadBasis<T, P>,
+    settings: &InverseSettings<T>,
+) -> SVector<T, P> {
+    prior_weight_for(model, basis, settings.prior_std_scale)
+}
+
+/// `1 / prior std` for each parameter for a prior of `std_scale` buckling scales.
+fn prior_weight_for<T: Scalar, A: Attitude<T>, const P: usize>(
+    model: &Model<T, A>,
+    basis: &LoadBasis<T, P>,
+    std_scale: T,
+) -> SVector<T, P> {
+    let moment_scale = model.moment_scale_nm();
+    let force_scale = moment_scale / model.length_m();
+    SVector::from_fn(|j, _| {
+        // A parameter's effect, measured in units of the buckling scale.
+        let effect = basis.force_n.column(j).norm() / force_scale
+            + basis.moment_nm.column(j).norm() / moment_scale;
+        let std = std_scale / effect;
+        if std.is_finite() && std > T::zero() {
+            T::one() / std
+        } else {
+            T::zero()
+        }
+    })
 }
 
 /// Where an inverse solve starts.
@@ -619,18 +837,7 @@ where
     basis.validate()?;
     settings.validate()?;
     let measured = validate_measurements(model, measured_m)?;
-    let problem = Problem {
-        model,
-        basis: *basis,
-        measured,
-        settings: *settings,
-        cables: model.rod().cables.len(),
-        radius_m: model
-            .rod()
-            .cables
-            .iter()
-            .fold(T::zero(), |r, c| r.max(c.radius_m)),
-    };
+    let problem = Problem::new(model, *basis, measured, *settings);
     let mut work = crate::shooting::Work::default();
     let x = match start {
         InverseStart::Params(p) => {
@@ -700,18 +907,36 @@ where
             return self.finish(x, &lin, Termination::NonFinite, work);
         }
         let mut lin = self.linearize(&x, &sw);
-        let mut merit = self.merit(&lin.e, &lin.rc);
-        let mut mu = T::zero();
-        let mut rejections = 0u8;
+        // A graduated prior: the first steps hold the load to a tenth of the buckling scale, then the
+        // prior relaxes by half each accepted step to its final value. From a cold start the linear
+        // model can trade a large axial force for bending (at the sagging shape an axial force and a
+        // lateral one bend the rod alike); the tight start finds the bending-consistent answer first.
+        let start_weight = prior_weight_for(self.model, &self.basis, T::lit(0.1));
+        let mut relax = T::one();
+        let mut stage = self.with_prior(self.graduated(&start_weight, relax));
+        let mut merit = stage.merit(&x.p, &lin);
+        // Levenberg-Marquardt with Nielsen's damping update: the gain ratio (actual over predicted
+        // decrease) sets the damping. It starts as Gauss-Newton.
+        let mut mu = T::lit(1e-12);
+        let mut nu = T::lit(2.0);
+        let mut previous_tip_move = None;
         for _ in 0..self.settings.max_iterations {
             let Some(red) = self.reduce(&lin) else {
                 return self.finish(x, &lin, Termination::Singular, work);
             };
-            let step = self.step(&red, mu);
-            if self.converged(&x, &lin, step.as_ref(), &red) {
+            let final_stage = stage.prior_weight == self.prior_weight;
+            let (done, tip_move) = stage.converged(&x, &lin, &red, previous_tip_move);
+            if done && final_stage {
                 return self.finish(x, &lin, Termination::Converged, work);
             }
-            let Some((du, dp)) = step else {
+            if done {
+                // The tight prior has found the basin: go to the final prior at once.
+                stage = *self;
+                merit = stage.merit(&x.p, &lin);
+                previous_tip_move = None;
+                continue;
+            }
+            let Some((du, dp)) = stage.step(&red, &x.p, mu) else {
                 return self.finish(x, &lin, Termination::Singular, work);
             };
             work.iterations = work.iterations.saturating_add(1);
@@ -721,35 +946,60 @@ where
             };
             work.sweeps = work.sweeps.saturating_add(1);
             let sw = self.full_sweep(&trial);
-            let trial_lin = sw.finite.then(|| self.linearize(&trial, &sw));
-            let trial_merit = trial_lin.as_ref().map(|l| self.merit(&l.e, &l.rc));
-            match (trial_lin, trial_merit) {
-                (Some(l), Some(m)) if m < merit => {
+            let projected = if sw.finite {
+                self.project(trial, self.linearize(&trial, &sw), &mut work)
+            } else {
+                None
+            };
+            let predicted = stage.predicted_decrease(&red, &x.p, &dp);
+            match projected.map(|(t, l)| {
+                let m = stage.merit(&t.p, &l);
+                (t, l, m)
+            }) {
+                Some((trial, l, m))
+                    if m < merit && predicted > T::zero() && self.acceptable(&trial.p, &l) =>
+                {
+                    let rho = (merit - m) / predicted;
+                    let t = T::lit(2.0) * rho - T::one();
+                    mu = (mu * (T::one() - t * t * t).max(T::lit(1.0 / 3.0))).max(T::lit(1e-15));
+                    nu = T::lit(2.0);
                     (x, lin, merit) = (trial, l, m);
-                    mu *= T::lit(0.25);
-                    if mu < T::lit(1e-6) {
-                        mu = T::zero();
+                    previous_tip_move = Some(tip_move);
+                    if !final_stage {
+                        relax *= T::lit(0.5);
+                        stage = self.with_prior(self.graduated(&start_weight, relax));
+                        merit = stage.merit(&x.p, &lin);
+                        previous_tip_move = None;
                     }
-                    rejections = 0;
                 }
                 _ => {
-                    mu = if mu == T::zero() {
-                        T::lit(1e-3)
-                    } else {
-                        mu * T::lit(8.0)
-                    };
-                    rejections += 1;
-                    if rejections >= 8 {
-                        return self.finish(x, &lin, Termination::Stalled, work);
+                    mu = (mu * nu).max(T::lit(1e-6));
+                    nu *= T::lit(2.0);
+                    if mu > T::lit(1e12) && !final_stage {
+                        // Stuck under the graduated prior: release it and go on.
+                        stage = *self;
+                        merit = stage.merit(&x.p, &lin);
+                        previous_tip_move = None;
+                        mu = T::lit(1e-12);
+                        nu = T::lit(2.0);
+                    } else if mu > T::lit(1e12) {
+                        // No step improves the fit. If the last Gauss-Newton step is itself negligible,
+                        // this is the rounding floor, not a failure.
+                        let termination = if stage.converged(&x, &lin, &red, None).0 {
+                            Termination::Converged
+                        } else {
+                            Termination::Stalled
+                        };
+                        return self.finish(x, &lin, termination, work);
                     }
                 }
             }
         }
-        let red = self.reduce(&lin);
-        let step = red.as_ref().and_then(|r| self.step(r, T::zero()));
-        let done = red
-            .as_ref()
-            .is_some_and(|r| self.converged(&x, &lin, step.as_ref(), r));
+        let final_stage = stage.prior_weight == self.prior_weight;
+        let done = final_stage
+            && self
+                .reduce(&lin)
+                .is_some_and(|r| self.converged(&x, &lin, &r, previous_tip_move).0);
         let termination = if done {
             Termination::Converged
         } else {
@@ -769,14 +1019,7 @@ where
         let quality = self.quality(lin, red.as_ref());
         let mut termination = termination;
         let stability = if termination.is_success() && self.settings.check_stability {
-            let conservative = self.model.conservative(&self.basis.load(&x.p).moment_nm);
-            let verdict = classify(
-                conservative,
-                lin.conjugate_point_m,
-                &lin.j_eu,
-                &lin.d_theta_tip_u,
-                self.model.length_m(),
-            );
+            let verdict = self.stability(&x.p, lin);
             if !verdict.is_acceptable() {
                 termination = Termination::Unstable;
             }
@@ -814,38 +1057,35 @@ where
 /// Settings of the warm-started [`Estimator`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EstimatorSettings<T> {
-    /// The inverse solve's settings (measurement noise, trust region; its tolerances apply to the
-    /// first, cold estimate).
+    /// The inverse solve's settings, for the first (cold) estimate and every update.
     pub inverse: InverseSettings<T>,
     /// Most sweeps one update may take (its cost bound). The first is a plain sweep; the others carry
     /// six tangents and cost about 2.2 plain sweeps each.
     pub max_sweeps: u8,
-    /// An update has converged when the next step would move the tip by less than this, m, and the
-    /// fit by less than `fit_tolerance_sigma` standard deviations. Raised to what the scalar type
-    /// resolves (`4 L` times the default shooting tolerance: 37 um for f32 on a 39 cm rod).
-    pub tip_tolerance_m: T,
-    /// See `tip_tolerance_m`. Raised to what the scalar type can resolve (a few `eps L` of cable
-    /// length: about 0.3 standard deviations for f32 and a 2 um standard deviation).
-    pub fit_tolerance_sigma: T,
 }
 
 impl<T: Scalar> Default for EstimatorSettings<T> {
-    /// A control loop needs the answer to a fraction of the measurement noise, not to rounding: an
-    /// update stops when the next step would move the tip by less than 10 um and the fit by less
-    /// than 0.01 standard deviations.
+    /// See [`EstimatorSettings::with_inverse`].
     fn default() -> Self {
         Self::with_inverse(InverseSettings::default())
     }
 }
 
 impl<T: Scalar> EstimatorSettings<T> {
-    /// Control-loop tolerances (see [`Default`]) on top of the given inverse settings.
+    /// Control-loop tolerances on top of the given inverse settings: a control loop needs the answer
+    /// to a fraction of the measurement noise, not to rounding, so an update stops when the next step
+    /// would move the tip by less than 10 um and the fit by less than 0.01 standard deviations, with
+    /// the tip moment to 1e-5 of `E I / L` (a few um at the tip, consistent with the tip tolerance).
+    /// Three sweeps per update at most.
     pub fn with_inverse(inverse: InverseSettings<T>) -> Self {
         Self {
-            inverse,
+            inverse: InverseSettings {
+                tolerance: inverse.tolerance.max(T::lit(1e-5)),
+                tip_tolerance_m: inverse.tip_tolerance_m.max(T::lit(1e-5)),
+                step_tolerance_sigma: inverse.step_tolerance_sigma.max(T::lit(1e-2)),
+                ..inverse
+            },
             max_sweeps: 3,
-            tip_tolerance_m: T::lit(1e-5),
-            fit_tolerance_sigma: T::lit(1e-2),
         }
     }
 }
@@ -886,8 +1126,6 @@ where
                 "estimator sweep budget (at least 2)",
             ));
         }
-        positive(settings.tip_tolerance_m, "tip tolerance")?;
-        positive(settings.fit_tolerance_sigma, "fit tolerance")?;
         let first = estimate(
             model,
             &basis,
@@ -920,19 +1158,7 @@ where
     }
 
     fn problem(&self, measured: CableVector<T>) -> Problem<'a, T, A, P> {
-        Problem {
-            model: self.model,
-            basis: self.basis,
-            measured,
-            settings: self.settings.inverse,
-            cables: self.model.rod().cables.len(),
-            radius_m: self
-                .model
-                .rod()
-                .cables
-                .iter()
-                .fold(T::zero(), |r, c| r.max(c.radius_m)),
-        }
+        Problem::new(self.model, self.basis, measured, self.settings.inverse)
     }
 
     /// One estimate for new measurements (one per cable, m), warm-started from the last.
@@ -948,17 +1174,16 @@ where
             return Ok(problem.finish(self.x, &self.lin, Termination::NonFinite, work));
         }
         self.lin.set_residual(&sw, problem.cable_residual(&sw));
-        let mut merit = problem.merit(&self.lin.e, &self.lin.rc);
+        let mut merit = problem.merit(&self.x.p, &self.lin);
         let mut exact = false;
         loop {
             let Some(red) = problem.reduce(&self.lin) else {
                 return Ok(self.finish(&problem, Termination::Singular, work));
             };
-            let step = problem.step(&red, T::zero());
-            if self.settled(&problem, step.as_ref(), &red) {
+            if problem.converged(&self.x, &self.lin, &red, None).0 {
                 return Ok(self.finish(&problem, Termination::Converged, work));
             }
-            let Some((du, dp)) = step else {
+            let Some((du, dp)) = problem.step(&red, &self.x.p, T::zero()) else {
                 return Ok(self.finish(&problem, Termination::Singular, work));
             };
             if work.sweeps >= budget {
@@ -973,8 +1198,8 @@ where
             let sw = problem.full_sweep(&trial);
             if sw.finite {
                 let lin = problem.linearize(&trial, &sw);
-                let trial_merit = problem.merit(&lin.e, &lin.rc);
-                if trial_merit < merit {
+                let trial_merit = problem.merit(&trial.p, &lin);
+                if trial_merit < merit && problem.acceptable(&trial.p, &lin) {
                     (self.x, self.lin, merit, exact) = (trial, lin, trial_merit, true);
                     self.stability = self.verdict(&problem);
                     continue;
@@ -997,41 +1222,10 @@ where
 
     fn verdict(&self, problem: &Problem<'_, T, A, P>) -> Stability<T> {
         if problem.settings.check_stability {
-            let conservative = self
-                .model
-                .conservative(&self.basis.load(&self.x.p).moment_nm);
-            classify(
-                conservative,
-                self.lin.conjugate_point_m,
-                &self.lin.j_eu,
-                &self.lin.d_theta_tip_u,
-                self.model.length_m(),
-            )
+            problem.stability(&self.x.p, &self.lin)
         } else {
             Stability::Unchecked
         }
-    }
-
-    /// Whether the next step is negligible: it would move the tip by less than the tip tolerance and
-    /// the fit by less than the fit tolerance.
-    fn settled(
-        &self,
-        problem: &Problem<'_, T, A, P>,
-        step: Option<&(Vector3<T>, SVector<T, P>)>,
-        red: &Reduced<T, P>,
-    ) -> bool {
-        let fit_tolerance = self
-            .settings
-            .fit_tolerance_sigma
-            .max(problem.fit_floor_sigma());
-        // The tip is resolved to about the shooting tolerance (an angle) times the rod length.
-        let tip_floor = self.model.length_m() * default_tolerance::<T>() * T::lit(4.0);
-        let tip_tolerance = self.settings.tip_tolerance_m.max(tip_floor);
-        step.is_some_and(|(du, dp)| {
-            let tip_move = (self.lin.d_tip_u * du + self.lin.d_tip_p * dp).norm();
-            let fit_move = (red.g * dp).norm();
-            tip_move <= tip_tolerance && fit_move <= fit_tolerance
-        })
     }
 
     fn finish(

@@ -481,11 +481,17 @@ where
             f64s(&(est.tip_position_m - tip)).norm(),
             tol::<T>(1e-6, 1e-4),
         )?;
-        within(
-            "force error, N",
-            (f64s(&est.params) - Vector3::from(path(k))).norm(),
-            tol::<T>(1e-6, 2e-3),
-        )?;
+        // The estimate is a posterior mode (a weak prior on the load): its bias must be a small fraction
+        // of the uncertainty it reports.
+        for i in 0..3 {
+            let err = (est.params[i].to_f64() - path(k)[i]).abs();
+            let sd = est.quality.force_std_n[i].to_f64();
+            within(
+                "force error over a tenth of its reported sd",
+                err / (0.1 * sd),
+                1.0,
+            )?;
+        }
     }
     Ok(())
 }
@@ -500,7 +506,11 @@ where
     rod.gravity_m_s2 = Vector3::zeros();
     let model = ok("model", Model::new(rod))?;
     let eq = solved(&model, &TipLoad::zero())?;
-    let settings = InverseSettings::with_resolution(T::lit(7.7e-6));
+    // The data alone (no prior), to compare with the closed form.
+    let settings = InverseSettings {
+        prior_std_scale: T::lit(f64::INFINITY),
+        ..InverseSettings::with_resolution(T::lit(7.7e-6))
+    };
     let est = ok(
         "estimate input",
         estimate(
@@ -577,7 +587,11 @@ where
         )?),
     )?;
     let basis = ok("basis", LoadBasis::force_along(&lit3([0.0, -1.0, 0.0])))?;
-    let settings = InverseSettings::with_resolution(T::lit(1e-3));
+    // The data alone (no prior): exact lengths must give back the exact weight.
+    let settings = InverseSettings {
+        prior_std_scale: T::lit(f64::INFINITY),
+        ..InverseSettings::with_resolution(T::lit(1e-3))
+    };
     let mut std = [0.0f64; 2];
     for (i, grams) in [17.2, 83.2].into_iter().enumerate() {
         let weight = grams * 1e-3 * reference::GRAVITY_M_S2;
@@ -593,11 +607,12 @@ where
             ),
         )?;
         holds("estimate converged", est.report.termination.is_success())?;
-        // f32 rounds the length to ~1e-7 m, and near saturation the length moves only ~1e-3 m per N.
+        // The solve stops at 1e-4 sd of fit; f32 rounds the length to ~1e-7 m, and near saturation
+        // the length moves only ~1e-3 m per N.
         within(
             "weight error, N",
             (est.params[0].to_f64() - weight).abs(),
-            tol::<T>(1e-8, 5e-4),
+            tol::<T>(1e-6, 5e-4),
         )?;
         std[i] = est.quality.param_std[0].to_f64();
     }

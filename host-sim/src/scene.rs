@@ -1,0 +1,712 @@
+//! Scene files (TOML): the rod and its sections, guides, cables, loads, gravity, output points, solver
+//! and estimator settings. Keys carry their units; unknown keys are refused, so a typo is an error
+//! and not a silently ignored setting.
+//!
+//! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`]; every error names the
+//! field and the reason.
+
+use std::fmt;
+use std::path::Path;
+
+use model_core::{
+    Cable, CrossSection, Guide, GuideMass, Material, PointLoad, Rod, Section, ShootingSettings,
+    Stiffness, StrainModel, TipLoad,
+};
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+
+/// Why a scene could not be used: the field and the reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    /// Where: a file, or a dotted field path such as `section[1].length_m`.
+    pub field: String,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
+impl SceneError {
+    /// An error at `field`.
+    pub fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.reason)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// What the scene is.
+    #[serde(default)]
+    pub name: String,
+    /// Gravity, m/s^2, global frame (default: 9.81 along -y).
+    #[serde(default = "default_gravity")]
+    pub gravity_m_s2: [f64; 3],
+    /// The clamp.
+    #[serde(default)]
+    pub base: Base,
+    /// Sections from base to tip.
+    #[serde(rename = "section")]
+    pub sections: Vec<SectionSpec>,
+    /// Cable guides.
+    #[serde(default)]
+    pub guides: Option<Guides>,
+    /// Cables through the guides.
+    #[serde(default, rename = "cable")]
+    pub cables: Vec<CableSpec>,
+    /// Point loads on the backbone.
+    #[serde(default, rename = "load")]
+    pub loads: Vec<LoadSpec>,
+    /// The tip load (the unknown of the inverse; a given of `solve`).
+    #[serde(default)]
+    pub tip: TipSpec,
+    /// Where to report the shape.
+    #[serde(default)]
+    pub output: Output,
+    /// Forward-solver settings.
+    #[serde(default)]
+    pub solver: Solver,
+    /// Inverse settings.
+    #[serde(default)]
+    pub estimate: EstimateSpec,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -model_core::reference::GRAVITY_M_S2, 0.0]
+}
+
+/// The clamp: position and the frame's local x and z (tangent) axes in global coordinates.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Base {
+    /// Base position, m.
+    #[serde(default)]
+    pub position_m: [f64; 3],
+    /// The local x axis (the side of cable angle 0), global coordinates.
+    pub local_x: [f64; 3],
+    /// The tangent (local z), global coordinates.
+    pub tangent: [f64; 3],
+}
+
+impl Default for Base {
+    /// The thesis bench: tangent along +x, local x (cable 0) along +y.
+    fn default() -> Self {
+        Self {
+            position_m: [0.0; 3],
+            local_x: [0.0, 1.0, 0.0],
+            tangent: [1.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// One section.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SectionSpec {
+    /// Reference length, m.
+    pub length_m: f64,
+    /// RK4 steps over the section.
+    pub steps: u16,
+    /// Line density of the rod, kg/m (or give `density_kg_m3` with a diameter).
+    pub line_density_kg_per_m: Option<f64>,
+    /// Material density, kg/m^3 (line density = density x area).
+    pub density_kg_m3: Option<f64>,
+    /// Material (with `cross_section`), or `stiffness` directly.
+    pub material: Option<MaterialSpec>,
+    /// Cross-section (with `material`).
+    pub cross_section: Option<CrossSectionSpec>,
+    /// Stiffness given directly.
+    pub stiffness: Option<StiffnessSpec>,
+}
+
+/// An isotropic material: Young's modulus and Poisson's ratio or shear modulus.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Young's modulus, Pa.
+    pub youngs_modulus_pa: f64,
+    /// Poisson's ratio (shear modulus `E / 2(1 + nu)`).
+    pub poisson_ratio: Option<f64>,
+    /// Shear modulus, Pa.
+    pub shear_modulus_pa: Option<f64>,
+}
+
+/// A circular cross-section.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CrossSectionSpec {
+    /// Outer diameter, m.
+    pub diameter_m: f64,
+    /// Inner diameter for a tube, m.
+    #[serde(default)]
+    pub inner_diameter_m: f64,
+}
+
+/// Stiffness given directly.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StiffnessSpec {
+    /// E I1, E I2 and G J, N m^2.
+    pub bending_torsion_nm2: [f64; 3],
+    /// G A, G A and E A, N.
+    pub shear_axial_n: [f64; 3],
+}
+
+/// Cable guides: evenly spaced (`first_centre_m`, `pitch_m`, `count`) or listed (`centres_m`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Guides {
+    /// How guide mass enters: "ignore", "average" or "accurate".
+    #[serde(default = "default_mass_model")]
+    pub mass_model: String,
+    /// Centre of the first guide, m.
+    pub first_centre_m: Option<f64>,
+    /// Centre-to-centre spacing, m.
+    pub pitch_m: Option<f64>,
+    /// Number of evenly spaced guides.
+    pub count: Option<usize>,
+    /// Explicit centres, m.
+    pub centres_m: Option<Vec<f64>>,
+    /// Thickness along the backbone, m.
+    #[serde(default)]
+    pub thickness_m: f64,
+    /// Mass of each guide, kg.
+    #[serde(default)]
+    pub mass_kg: f64,
+}
+
+fn default_mass_model() -> String {
+    "accurate".into()
+}
+
+/// A cable.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CableSpec {
+    /// Hole angle about the tangent from local x, degrees.
+    pub angle_deg: f64,
+    /// Hole distance from the backbone, m.
+    pub radius_m: f64,
+    /// Termination arc length, m (default: the tip).
+    pub end_m: Option<f64>,
+}
+
+/// A point load.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    /// Arc length, m.
+    pub s_m: f64,
+    /// Hung mass, kg.
+    #[serde(default)]
+    pub mass_kg: f64,
+    /// Force, N, global frame.
+    #[serde(default)]
+    pub force_n: [f64; 3],
+    /// Moment, N m, global frame.
+    #[serde(default)]
+    pub moment_nm: [f64; 3],
+}
+
+/// The tip load.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TipSpec {
+    /// Force, N, global frame.
+    #[serde(default)]
+    pub force_n: [f64; 3],
+    /// Moment, N m, global frame.
+    #[serde(default)]
+    pub moment_nm: [f64; 3],
+    /// A mass hung at the tip, kg (its weight adds to the force).
+    #[serde(default)]
+    pub mass_kg: f64,
+}
+
+/// Output points: explicit arc lengths, or `points` evenly spaced from base to tip.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Arc lengths, m, increasing.
+    pub s_m: Option<Vec<f64>>,
+    /// Evenly spaced points including both ends.
+    #[serde(default = "default_points")]
+    pub points: usize,
+}
+
+fn default_points() -> usize {
+    41
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self {
+            s_m: None,
+            points: default_points(),
+        }
+    }
+}
+
+/// Forward-solver settings.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Solver {
+    /// Frame integration: "quaternion", "rotation-matrix" or "lie-group".
+    #[serde(default = "default_attitude")]
+    pub attitude: String,
+    /// "cosserat" (shear and extension) or "kirchhoff" (neither).
+    #[serde(default = "default_strain_model")]
+    pub strain_model: String,
+    /// Dimensionless tolerance on the tip-moment residual (default: model-core's).
+    pub tolerance: Option<f64>,
+    /// Newton iterations.
+    #[serde(default = "default_iterations")]
+    pub max_iterations: u16,
+    /// Run the stability test on answers.
+    #[serde(default = "default_true")]
+    pub check_stability: bool,
+}
+
+fn default_attitude() -> String {
+    "quaternion".into()
+}
+fn default_strain_model() -> String {
+    "cosserat".into()
+}
+fn default_iterations() -> u16 {
+    40
+}
+fn default_true() -> bool {
+    true
+}
+
+impl Default for Solver {
+    fn default() -> Self {
+        Self {
+            attitude: default_attitude(),
+            strain_model: default_strain_model(),
+            tolerance: None,
+            max_iterations: default_iterations(),
+            check_stability: true,
+        }
+    }
+}
+
+/// Inverse settings.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EstimateSpec {
+    /// Resolution of a cable-length measurement, m (standard deviation = resolution / sqrt 12).
+    #[serde(default = "default_resolution")]
+    pub resolution_m: f64,
+    /// A force component with a larger standard deviation makes the estimate "weak", N.
+    #[serde(default = "default_max_force_std")]
+    pub max_force_std_n: f64,
+}
+
+fn default_resolution() -> f64 {
+    // A 4096-count encoder on a 5 mm-radius spool.
+    2.0 * std::f64::consts::PI * 5e-3 / 4096.0
+}
+fn default_max_force_std() -> f64 {
+    0.05
+}
+
+impl Default for EstimateSpec {
+    fn default() -> Self {
+        Self {
+            resolution_m: default_resolution(),
+            max_force_std_n: default_max_force_std(),
+        }
+    }
+}
+
+/// How the frame is integrated (see `model_core::kinematics`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttitudeChoice {
+    /// Quaternion RK4 (the default).
+    Quaternion,
+    /// Rotation-matrix RK4 (as the thesis).
+    RotationMatrix,
+    /// Lie-group RKMK4.
+    LieGroup,
+}
+
+fn vec3(v: [f64; 3]) -> Vector3<f64> {
+    Vector3::from(v)
+}
+
+fn finite(field: &str, x: f64) -> Result<f64, SceneError> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(SceneError::new(field, "must be a finite number"))
+    }
+}
+
+impl Scene {
+    /// Parses a scene from TOML text; `origin` names it in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| {
+            let message = e.message().to_string();
+            // Name the place by line number and by the line itself, which shows the key.
+            let place = e
+                .span()
+                .map(|span| {
+                    let before = text.get(..span.start).unwrap_or("");
+                    let line = before.matches('\n').count() + 1;
+                    let content = text.lines().nth(line - 1).unwrap_or("").trim();
+                    format!("{origin}, line {line} (`{content}`)")
+                })
+                .unwrap_or_else(|| origin.to_string());
+            SceneError::new(place, message)
+        })
+    }
+
+    /// Reads and parses a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SceneError::new(path.display().to_string(), format!("cannot read: {e}"))
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// The frame integration chosen in `[solver]`.
+    pub fn attitude(&self) -> Result<AttitudeChoice, SceneError> {
+        match self.solver.attitude.as_str() {
+            "quaternion" => Ok(AttitudeChoice::Quaternion),
+            "rotation-matrix" => Ok(AttitudeChoice::RotationMatrix),
+            "lie-group" => Ok(AttitudeChoice::LieGroup),
+            other => Err(SceneError::new(
+                "solver.attitude",
+                format!(
+                    "unknown \"{other}\" (expected \"quaternion\", \"rotation-matrix\" or \"lie-group\")"
+                ),
+            )),
+        }
+    }
+
+    /// The forward-solver settings.
+    pub fn shooting_settings(&self) -> Result<ShootingSettings<f64>, SceneError> {
+        let mut settings = ShootingSettings {
+            max_iterations: self.solver.max_iterations,
+            check_stability: self.solver.check_stability,
+            ..ShootingSettings::default()
+        };
+        if let Some(tolerance) = self.solver.tolerance {
+            if !(tolerance.is_finite() && tolerance > 0.0) {
+                return Err(SceneError::new(
+                    "solver.tolerance",
+                    "must be a positive number",
+                ));
+            }
+            settings.tolerance = tolerance;
+        }
+        Ok(settings)
+    }
+
+    /// The tip load, in SI (the tip mass's weight along gravity added to the force).
+    pub fn tip_load(&self) -> Result<TipLoad<f64>, SceneError> {
+        for (field, v) in [
+            ("tip.force_n", self.tip.force_n),
+            ("tip.moment_nm", self.tip.moment_nm),
+        ] {
+            for x in v {
+                finite(field, x)?;
+            }
+        }
+        if !(self.tip.mass_kg.is_finite() && self.tip.mass_kg >= 0.0) {
+            return Err(SceneError::new(
+                "tip.mass_kg",
+                "must be a non-negative number",
+            ));
+        }
+        Ok(TipLoad {
+            force_n: vec3(self.tip.force_n) + vec3(self.gravity_m_s2) * self.tip.mass_kg,
+            moment_nm: vec3(self.tip.moment_nm),
+        })
+    }
+
+    /// The output arc lengths, m.
+    pub fn output_points_m(&self, length_m: f64) -> Result<Vec<f64>, SceneError> {
+        match &self.output.s_m {
+            Some(s) => {
+                let mut previous = 0.0;
+                for (i, &x) in s.iter().enumerate() {
+                    let field = format!("output.s_m[{i}]");
+                    finite(&field, x)?;
+                    if x < previous {
+                        return Err(SceneError::new(field, "arc lengths must increase"));
+                    }
+                    if x > length_m {
+                        return Err(SceneError::new(
+                            field,
+                            format!("{x} m is beyond the tip ({length_m} m)"),
+                        ));
+                    }
+                    previous = x;
+                }
+                Ok(s.clone())
+            }
+            None => {
+                let n = self.output.points;
+                if n < 2 {
+                    return Err(SceneError::new("output.points", "must be at least 2"));
+                }
+                Ok((0..n)
+                    .map(|i| length_m * i as f64 / (n - 1) as f64)
+                    .collect())
+            }
+        }
+    }
+
+    /// The rod in SI units. Fails with the first field that is missing, inconsistent or out of range.
+    pub fn rod(&self) -> Result<Rod<f64>, SceneError> {
+        let mut rod = Rod::new();
+        let cap = |what: &str| SceneError::new(what, "more than the model's fixed capacity");
+        for (i, x) in self.gravity_m_s2.iter().enumerate() {
+            finite(&format!("gravity_m_s2[{i}]"), *x)?;
+        }
+        rod.gravity_m_s2 = vec3(self.gravity_m_s2);
+        rod.base_position_m = vec3(self.base.position_m);
+        rod.base_orientation = self.base_orientation()?;
+        rod.strain_model = match self.solver.strain_model.as_str() {
+            "cosserat" => StrainModel::Cosserat,
+            "kirchhoff" => StrainModel::Kirchhoff,
+            other => {
+                return Err(SceneError::new(
+                    "solver.strain_model",
+                    format!("unknown \"{other}\" (expected \"cosserat\" or \"kirchhoff\")"),
+                ));
+            }
+        };
+        if self.sections.is_empty() {
+            return Err(SceneError::new(
+                "section",
+                "at least one [[section]] is needed",
+            ));
+        }
+        for (i, spec) in self.sections.iter().enumerate() {
+            let section = spec.section(&format!("section[{i}]"))?;
+            rod.push_section(section).map_err(|_| cap("section"))?;
+        }
+        let length_m: f64 = self.sections.iter().map(|s| s.length_m).sum();
+        if let Some(guides) = &self.guides {
+            rod.guide_mass = match guides.mass_model.as_str() {
+                "ignore" => GuideMass::Ignore,
+                "average" => GuideMass::Average,
+                "accurate" => GuideMass::Accurate,
+                other => {
+                    return Err(SceneError::new(
+                        "guides.mass_model",
+                        format!(
+                            "unknown \"{other}\" (expected \"ignore\", \"average\" or \"accurate\")"
+                        ),
+                    ));
+                }
+            };
+            for guide in guides.guides()? {
+                rod.push_guide(guide).map_err(|_| cap("guides"))?;
+            }
+        }
+        for (i, c) in self.cables.iter().enumerate() {
+            let field = format!("cable[{i}]");
+            rod.push_cable(Cable {
+                angle_rad: finite(&format!("{field}.angle_deg"), c.angle_deg)?.to_radians(),
+                radius_m: finite(&format!("{field}.radius_m"), c.radius_m)?,
+                end_m: finite(&format!("{field}.end_m"), c.end_m.unwrap_or(length_m))?,
+            })
+            .map_err(|_| cap("cables"))?;
+        }
+        for (i, l) in self.loads.iter().enumerate() {
+            rod.push_load(PointLoad {
+                s_m: l.s_m,
+                mass_kg: l.mass_kg,
+                force_n: vec3(l.force_n),
+                moment_nm: vec3(l.moment_nm),
+            })
+            .map_err(|_| cap(&format!("load[{i}]")))?;
+        }
+        rod.validate()
+            .map_err(|e| SceneError::new(field_of(&e), e.to_string()))?;
+        Ok(rod)
+    }
+
+    fn base_orientation(&self) -> Result<Matrix3<f64>, SceneError> {
+        let x = vec3(self.base.local_x);
+        let z = vec3(self.base.tangent);
+        let (nx, nz) = (x.norm(), z.norm());
+        if !(nx.is_finite() && nx > 0.0) {
+            return Err(SceneError::new("base.local_x", "must be a non-zero vector"));
+        }
+        if !(nz.is_finite() && nz > 0.0) {
+            return Err(SceneError::new("base.tangent", "must be a non-zero vector"));
+        }
+        let (x, z) = (x / nx, z / nz);
+        if x.dot(&z).abs() > 1e-9 {
+            return Err(SceneError::new(
+                "base.local_x",
+                "must be perpendicular to base.tangent",
+            ));
+        }
+        Ok(Matrix3::from_columns(&[x, z.cross(&x), z]))
+    }
+}
+
+/// Which scene field a model-core validation error points at.
+fn field_of(e: &model_core::ModelError) -> &'static str {
+    use model_core::ModelError::*;
+    let what = match e {
+        NonFinite(w) | NotPositive(w) | OutOfRange(w) | Unordered(w) | Capacity(w) | Empty(w)
+        | Mismatch(w) => *w,
+    };
+    match what {
+        w if w.starts_with("section") || w.contains("stiffness") || w.contains("density") => {
+            "section"
+        }
+        w if w.starts_with("guide") => "guides",
+        w if w.starts_with("cable") => "cable",
+        w if w.contains("load") || w.contains("mass") || w.contains("point") => "load",
+        w if w.contains("gravity") => "gravity_m_s2",
+        w if w.contains("base") => "base",
+        _ => "scene",
+    }
+}
+
+impl SectionSpec {
+    fn section(&self, field: &str) -> Result<Section<f64>, SceneError> {
+        let length_m = finite(&format!("{field}.length_m"), self.length_m)?;
+        if length_m <= 0.0 {
+            return Err(SceneError::new(
+                format!("{field}.length_m"),
+                "must be positive",
+            ));
+        }
+        if self.steps == 0 {
+            return Err(SceneError::new(
+                format!("{field}.steps"),
+                "must be at least 1",
+            ));
+        }
+        let err = |sub: &str, e: model_core::ModelError| {
+            SceneError::new(format!("{field}.{sub}"), e.to_string())
+        };
+        let (stiffness, area) = match (&self.stiffness, &self.material, &self.cross_section) {
+            (Some(k), None, None) => (
+                Stiffness::new(vec3(k.bending_torsion_nm2), vec3(k.shear_axial_n))
+                    .map_err(|e| err("stiffness", e))?,
+                None,
+            ),
+            (None, Some(m), Some(c)) => {
+                let material = match (m.poisson_ratio, m.shear_modulus_pa) {
+                    (Some(nu), None) => Material::isotropic(m.youngs_modulus_pa, nu)
+                        .map_err(|e| err("material", e))?,
+                    (None, Some(g)) => Material {
+                        youngs_modulus_pa: m.youngs_modulus_pa,
+                        shear_modulus_pa: g,
+                    },
+                    _ => {
+                        return Err(SceneError::new(
+                            format!("{field}.material"),
+                            "give exactly one of poisson_ratio and shear_modulus_pa",
+                        ));
+                    }
+                };
+                let section = if c.inner_diameter_m > 0.0 {
+                    CrossSection::tube(c.diameter_m, c.inner_diameter_m)
+                } else {
+                    CrossSection::solid_circle(c.diameter_m)
+                }
+                .map_err(|e| err("cross_section", e))?;
+                (
+                    Stiffness::from_material(&material, &section)
+                        .map_err(|e| err("material", e))?,
+                    Some(section.area_m2),
+                )
+            }
+            _ => {
+                return Err(SceneError::new(
+                    field,
+                    "give either [stiffness], or both [material] and [cross_section]",
+                ));
+            }
+        };
+        let line_density_kg_per_m = match (self.line_density_kg_per_m, self.density_kg_m3, area) {
+            (Some(l), None, _) => l,
+            (None, Some(rho), Some(a)) => rho * a,
+            (None, Some(_), None) => {
+                return Err(SceneError::new(
+                    format!("{field}.density_kg_m3"),
+                    "needs a cross_section; with direct stiffness give line_density_kg_per_m",
+                ));
+            }
+            (Some(_), Some(_), _) => {
+                return Err(SceneError::new(
+                    field,
+                    "give one of line_density_kg_per_m and density_kg_m3, not both",
+                ));
+            }
+            (None, None, _) => {
+                return Err(SceneError::new(
+                    format!("{field}.line_density_kg_per_m"),
+                    "missing (or give density_kg_m3 with a cross_section)",
+                ));
+            }
+        };
+        if !(line_density_kg_per_m.is_finite() && line_density_kg_per_m >= 0.0) {
+            return Err(SceneError::new(
+                format!("{field}.line_density_kg_per_m"),
+                "must be a non-negative number",
+            ));
+        }
+        Ok(Section {
+            length_m,
+            stiffness,
+            line_density_kg_per_m,
+            steps: self.steps,
+        })
+    }
+}
+
+impl Guides {
+    fn guides(&self) -> Result<Vec<Guide<f64>>, SceneError> {
+        let centres: Vec<f64> = match (
+            &self.centres_m,
+            self.first_centre_m,
+            self.pitch_m,
+            self.count,
+        ) {
+            (Some(c), None, None, None) => c.clone(),
+            (None, Some(first), Some(pitch), Some(count)) => {
+                (0..count).map(|k| first + k as f64 * pitch).collect()
+            }
+            _ => {
+                return Err(SceneError::new(
+                    "guides",
+                    "give either centres_m, or all of first_centre_m, pitch_m and count",
+                ));
+            }
+        };
+        centres
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| {
+                Ok(Guide {
+                    s_m: finite(&format!("guides.centres[{i}]"), s)?,
+                    thickness_m: finite("guides.thickness_m", self.thickness_m)?,
+                    mass_kg: finite("guides.mass_kg", self.mass_kg)?,
+                })
+            })
+            .collect()
+    }
+}

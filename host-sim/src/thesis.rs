@@ -1,0 +1,596 @@
+//! The thesis's experiments (ch. 4): Table 4.1 (two sections), Tables 4.3/4.4 (tip with guides, average
+//! and accurate mass) and Table 4.5 (cable deflection), run through the model in f64.
+//!
+//! The tables are in cm and grams; they are converted here, once, and the model works in SI.
+
+use model_core::reference::{self, csv_rows};
+use model_core::{Model, PointLoad, ShapePoint, Stability, Start, TipLoad};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::scene::{Scene, SceneError};
+use crate::scenes;
+
+/// Centimetres per metre.
+pub const CM_PER_M: f64 = 100.0;
+/// Kilograms per gram.
+pub const KG_PER_G: f64 = 1e-3;
+
+/// The thesis's own mean errors, as printed: Table 4.1 (section 1, section 2, % of the section length),
+/// Table 4.3 (% of the rod length), Table 4.5 (cm, average-mass and accurate-mass models).
+pub const THESIS_MEAN_ERR_4_1_PCT: [f64; 2] = [0.919, 1.33];
+/// See [`THESIS_MEAN_ERR_4_1_PCT`].
+pub const THESIS_MEAN_ERR_4_3_PCT: f64 = 1.269;
+/// See [`THESIS_MEAN_ERR_4_1_PCT`].
+pub const THESIS_MEAN_ERR_4_5_CM: [f64; 2] = [0.0819, 0.111];
+
+/// Reproduction tolerances: how close this model must come to the thesis's predictions.
+pub const TOL_4_1_CM: f64 = 0.1;
+/// Table 4.5: cable deltas, cm.
+pub const TOL_4_5_CM: f64 = 0.01;
+/// Tables 4.3/4.4: the thesis's predictions are not reproduced by the corrected model (see README);
+/// the check is that every row converges to a stable equilibrium and the mean error against the
+/// observed tips stays within this, % of the rod length (the thesis reports 1.27 %).
+pub const TOL_4_3_MEAN_PCT: f64 = 2.0;
+
+/// A point in the grid plane, cm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointCm {
+    /// x along the clamped rod, cm.
+    pub x: f64,
+    /// y up, cm.
+    pub y: f64,
+}
+
+impl PointCm {
+    fn from_m(v: &Vector3<f64>) -> Self {
+        Self {
+            x: v.x * CM_PER_M,
+            y: v.y * CM_PER_M,
+        }
+    }
+
+    /// Distance to another point, cm.
+    pub fn distance(&self, other: &Self) -> f64 {
+        ((self.x - other.x).powi(2) + (self.y - other.y).powi(2)).sqrt()
+    }
+}
+
+/// One solved row: the observed point, the thesis's prediction and ours.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TipRow {
+    /// Hung mass, g.
+    pub mass_g: f64,
+    /// Observed on the grid.
+    pub observed: PointCm,
+    /// The thesis's model.
+    pub thesis: PointCm,
+    /// This model.
+    pub ours: PointCm,
+    /// Did the solve converge to a stable equilibrium?
+    pub converged: bool,
+    /// The solve's stability verdict.
+    pub stability: Stability<f64>,
+}
+
+impl TipRow {
+    /// Our error against the observation, cm.
+    pub fn error_cm(&self) -> f64 {
+        self.ours.distance(&self.observed)
+    }
+    /// The thesis's error against the observation, cm.
+    pub fn thesis_error_cm(&self) -> f64 {
+        self.thesis.distance(&self.observed)
+    }
+    /// How far we are from the thesis's prediction, cm.
+    pub fn reproduction_cm(&self) -> f64 {
+        self.ours.distance(&self.thesis)
+    }
+}
+
+/// The backbone of one solved row, for plots, cm.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// Hung mass, g.
+    pub mass_g: f64,
+    /// Backbone points, cm.
+    pub points: Vec<PointCm>,
+}
+
+/// Experiment 1a: both section tips per row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table41 {
+    /// Section-1 tips.
+    pub section1: Vec<TipRow>,
+    /// Section-2 tips.
+    pub section2: Vec<TipRow>,
+    /// Backbones.
+    pub curves: Vec<Curve>,
+    /// Section length, cm (errors in % are of this, as in the thesis).
+    pub section_length_cm: f64,
+}
+
+/// Experiment 2: the tip per row, one mass model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table43 {
+    /// "average" or "accurate".
+    pub model: &'static str,
+    /// Tips.
+    pub rows: Vec<TipRow>,
+    /// Backbones.
+    pub curves: Vec<Curve>,
+    /// Rod length, cm.
+    pub rod_length_cm: f64,
+}
+
+/// Table 4.5: the measured cable's change of length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeltaRow {
+    /// Hung mass, g.
+    pub mass_g: f64,
+    /// Observed change, cm.
+    pub observed_cm: f64,
+    /// The thesis's predicted change, cm (average, accurate).
+    pub thesis_cm: [f64; 2],
+    /// Ours (average, accurate), cm.
+    pub ours_cm: [f64; 2],
+    /// Our predicted cable lengths (average, accurate), cm.
+    pub ours_length_cm: [f64; 2],
+}
+
+/// Table 4.5.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table45 {
+    /// Rows.
+    pub rows: Vec<DeltaRow>,
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    if n == 0 { f64::NAN } else { sum / n as f64 }
+}
+
+impl Table41 {
+    /// Mean error against the observations, % of the section length (sections 1 and 2).
+    pub fn mean_error_pct(&self) -> [f64; 2] {
+        [&self.section1, &self.section2]
+            .map(|rows| mean(rows.iter().map(TipRow::error_cm)) / self.section_length_cm * 100.0)
+    }
+    /// The thesis's mean error recomputed from its table, %.
+    pub fn thesis_mean_error_pct(&self) -> [f64; 2] {
+        [&self.section1, &self.section2].map(|rows| {
+            mean(rows.iter().map(TipRow::thesis_error_cm)) / self.section_length_cm * 100.0
+        })
+    }
+    /// Largest distance from the thesis's predictions, cm.
+    pub fn worst_reproduction_cm(&self) -> f64 {
+        self.section1
+            .iter()
+            .chain(&self.section2)
+            .map(TipRow::reproduction_cm)
+            .fold(0.0, f64::max)
+    }
+}
+
+impl Table43 {
+    /// Mean error against the observations, % of the rod length.
+    pub fn mean_error_pct(&self) -> f64 {
+        mean(self.rows.iter().map(TipRow::error_cm)) / self.rod_length_cm * 100.0
+    }
+    /// The thesis's mean error recomputed from its table, %.
+    pub fn thesis_mean_error_pct(&self) -> f64 {
+        mean(self.rows.iter().map(TipRow::thesis_error_cm)) / self.rod_length_cm * 100.0
+    }
+    /// Largest distance from the thesis's predictions, cm.
+    pub fn worst_reproduction_cm(&self) -> f64 {
+        self.rows
+            .iter()
+            .map(TipRow::reproduction_cm)
+            .fold(0.0, f64::max)
+    }
+}
+
+impl Table45 {
+    /// Mean absolute error of our deltas against the observations, cm (average, accurate).
+    pub fn mean_error_cm(&self) -> [f64; 2] {
+        [0, 1].map(|m| {
+            mean(
+                self.rows
+                    .iter()
+                    .map(|r| (r.ours_cm[m] - r.observed_cm).abs()),
+            )
+        })
+    }
+    /// Largest distance from the thesis's predicted deltas, cm (average, accurate).
+    pub fn worst_reproduction_cm(&self) -> [f64; 2] {
+        [0, 1].map(|m| {
+            self.rows
+                .iter()
+                .map(|r| (r.ours_cm[m] - r.thesis_cm[m]).abs())
+                .fold(0.0, f64::max)
+        })
+    }
+}
+
+/// Everything `validate` computes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Validation {
+    /// Experiment 1a.
+    pub table_4_1: Table41,
+    /// Experiment 2, average mass.
+    pub table_4_3_average: Table43,
+    /// Experiment 2, accurate mass.
+    pub table_4_4_accurate: Table43,
+    /// Cable deflection.
+    pub table_4_5: Table45,
+}
+
+/// A reproduction check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Check {
+    /// What.
+    pub name: String,
+    /// Measured.
+    pub value: f64,
+    /// Limit.
+    pub limit: f64,
+    /// Passed?
+    pub passed: bool,
+}
+
+impl Validation {
+    /// The reproduction checks `validate` enforces.
+    pub fn checks(&self) -> Vec<Check> {
+        let check = |name: &str, value: f64, limit: f64| Check {
+            name: name.into(),
+            value,
+            limit,
+            passed: value.is_finite() && value <= limit,
+        };
+        let not_converged = |rows: &[TipRow]| rows.iter().filter(|r| !r.converged).count() as f64;
+        let t45 = self.table_4_5.worst_reproduction_cm();
+        vec![
+            check(
+                "Table 4.1: worst distance from the thesis's predicted section tips, cm",
+                self.table_4_1.worst_reproduction_cm(),
+                TOL_4_1_CM,
+            ),
+            check(
+                "Table 4.1: rows not converged to a stable equilibrium",
+                not_converged(&self.table_4_1.section1),
+                0.0,
+            ),
+            check(
+                "Table 4.3 (average): rows not converged to a stable equilibrium",
+                not_converged(&self.table_4_3_average.rows),
+                0.0,
+            ),
+            check(
+                "Table 4.4 (accurate): rows not converged to a stable equilibrium",
+                not_converged(&self.table_4_4_accurate.rows),
+                0.0,
+            ),
+            check(
+                "Table 4.3 (average): mean tip error vs observed, % of rod",
+                self.table_4_3_average.mean_error_pct(),
+                TOL_4_3_MEAN_PCT,
+            ),
+            check(
+                "Table 4.4 (accurate): mean tip error vs observed, % of rod",
+                self.table_4_4_accurate.mean_error_pct(),
+                TOL_4_3_MEAN_PCT,
+            ),
+            check(
+                "Table 4.5 (average): worst distance from the thesis's deltas, cm",
+                t45[0],
+                TOL_4_5_CM,
+            ),
+            check(
+                "Table 4.5 (accurate): worst distance from the thesis's deltas, cm",
+                t45[1],
+                TOL_4_5_CM,
+            ),
+        ]
+    }
+}
+
+fn blank_point() -> ShapePoint<f64> {
+    ShapePoint {
+        s_m: 0.0,
+        position_m: Vector3::zeros(),
+        rotation: Matrix3::identity(),
+        strain_per_m: Vector3::zeros(),
+    }
+}
+
+/// Solves a scene's rod under a tip weight and returns the shape at `s_m`, the cable lengths and the report.
+pub(crate) struct Solved {
+    pub points: Vec<ShapePoint<f64>>,
+    pub cables_m: Vec<f64>,
+    pub converged: bool,
+    pub stability: Stability<f64>,
+}
+
+pub(crate) fn solve_rows(
+    model: &Model<f64>,
+    scene: &Scene,
+    load: &TipLoad<f64>,
+    s_m: &[f64],
+) -> Result<Solved, SceneError> {
+    let settings = scene.shooting_settings()?;
+    let eq = model
+        .solve(load, Start::Cold, &settings)
+        .map_err(|e| SceneError::new("tip", e.to_string()))?;
+    let mut points = vec![blank_point(); s_m.len()];
+    model
+        .shape(&eq, s_m, &mut points)
+        .map_err(|e| SceneError::new("output", e.to_string()))?;
+    Ok(Solved {
+        points,
+        cables_m: eq.cable_lengths_m.iter().copied().collect(),
+        converged: eq.report.termination.is_success(),
+        stability: eq.report.stability,
+    })
+}
+
+fn weight(scene: &Scene, mass_g: f64) -> TipLoad<f64> {
+    TipLoad::force(Vector3::from(scene.gravity_m_s2) * (mass_g * KG_PER_G))
+}
+
+fn table_error(e: model_core::ModelError) -> SceneError {
+    SceneError::new("thesis table", e.to_string())
+}
+
+/// Runs experiment 1a on the shipped two-section scene, one hung mass per row.
+pub fn table_4_1() -> Result<Table41, SceneError> {
+    let scene = scenes::exp1()?;
+    let transition_m = scene.sections.first().map_or(0.0, |s| s.length_m);
+    let base_rod = scene.rod()?;
+    let length_m = base_rod.length_m();
+    let curve_s = scene.output_points_m(length_m)?;
+    let mut out = Table41 {
+        section1: Vec::new(),
+        section2: Vec::new(),
+        curves: Vec::new(),
+        section_length_cm: transition_m * CM_PER_M,
+    };
+    for row in csv_rows::<9>(reference::TABLE_4_1_CSV) {
+        let row = row.map_err(table_error)?;
+        let mass_g = row[0];
+        let mut rod = base_rod.clone();
+        rod.loads.clear();
+        rod.push_load(PointLoad::mass(transition_m, mass_g * KG_PER_G))
+            .map_err(|e| SceneError::new("load", e.to_string()))?;
+        let model = Model::<f64>::new(rod).map_err(|e| SceneError::new("scene", e.to_string()))?;
+        let tips = solve_rows(&model, &scene, &TipLoad::zero(), &[transition_m, length_m])?;
+        let curve = solve_rows(&model, &scene, &TipLoad::zero(), &curve_s)?;
+        let converged = tips.converged && tips.stability == Stability::Stable;
+        for (i, (section, observed, thesis)) in [
+            (&mut out.section1, (row[1], row[2]), (row[5], row[6])),
+            (&mut out.section2, (row[3], row[4]), (row[7], row[8])),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let ours = tips.points.get(i).map_or(
+                PointCm {
+                    x: f64::NAN,
+                    y: f64::NAN,
+                },
+                |p| PointCm::from_m(&p.position_m),
+            );
+            section.push(TipRow {
+                mass_g,
+                observed: PointCm {
+                    x: observed.0,
+                    y: observed.1,
+                },
+                thesis: PointCm {
+                    x: thesis.0,
+                    y: thesis.1,
+                },
+                ours,
+                converged,
+                stability: tips.stability,
+            });
+        }
+        out.curves.push(Curve {
+            mass_g,
+            points: curve
+                .points
+                .iter()
+                .map(|p| PointCm::from_m(&p.position_m))
+                .collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// Runs experiment 2 (Table 4.3 with the average-mass scene, Table 4.4 with the accurate one).
+pub fn table_4_3(accurate: bool) -> Result<Table43, SceneError> {
+    let scene = if accurate {
+        scenes::exp2_accurate()?
+    } else {
+        scenes::exp2_average()?
+    };
+    let rod = scene.rod()?;
+    let length_m = rod.length_m();
+    let curve_s = scene.output_points_m(length_m)?;
+    let model = Model::<f64>::new(rod).map_err(|e| SceneError::new("scene", e.to_string()))?;
+    let mut out = Table43 {
+        model: if accurate { "accurate" } else { "average" },
+        rows: Vec::new(),
+        curves: Vec::new(),
+        rod_length_cm: length_m * CM_PER_M,
+    };
+    for row in csv_rows::<5>(reference::TABLE_4_3_CSV) {
+        let row = row.map_err(table_error)?;
+        let mass_g = row[0];
+        let solved = solve_rows(&model, &scene, &weight(&scene, mass_g), &curve_s)?;
+        let tip = solved.points.last().map_or(
+            PointCm {
+                x: f64::NAN,
+                y: f64::NAN,
+            },
+            |p| PointCm::from_m(&p.position_m),
+        );
+        out.rows.push(TipRow {
+            mass_g,
+            observed: PointCm {
+                x: row[1],
+                y: row[2],
+            },
+            thesis: PointCm {
+                x: row[3],
+                y: row[4],
+            },
+            ours: tip,
+            converged: solved.converged && solved.stability == Stability::Stable,
+            stability: solved.stability,
+        });
+        out.curves.push(Curve {
+            mass_g,
+            points: solved
+                .points
+                .iter()
+                .map(|p| PointCm::from_m(&p.position_m))
+                .collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// Runs Table 4.5: the measured cable's length per row, for both mass models, as a change from 0 g.
+pub fn table_4_5() -> Result<Table45, SceneError> {
+    let scenes = [scenes::exp2_average()?, scenes::exp2_accurate()?];
+    let models = scenes
+        .iter()
+        .map(|s| Model::<f64>::new(s.rod()?).map_err(|e| SceneError::new("scene", e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut rows = Vec::new();
+    let mut reference_cm = [f64::NAN; 2];
+    for (i, row) in csv_rows::<7>(reference::TABLE_4_5_CSV).enumerate() {
+        let row = row.map_err(table_error)?;
+        let mass_g = row[0];
+        let mut length_cm = [f64::NAN; 2];
+        for (m, (model, scene)) in models.iter().zip(&scenes).enumerate() {
+            let solved = solve_rows(model, scene, &weight(scene, mass_g), &[])?;
+            length_cm[m] = solved.cables_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M;
+            if i == 0 {
+                reference_cm[m] = length_cm[m];
+            }
+        }
+        rows.push(DeltaRow {
+            mass_g,
+            observed_cm: row[2],
+            thesis_cm: [row[4], row[6]],
+            ours_cm: [
+                length_cm[0] - reference_cm[0],
+                length_cm[1] - reference_cm[1],
+            ],
+            ours_length_cm: length_cm,
+        });
+    }
+    Ok(Table45 { rows })
+}
+
+/// Runs every experiment.
+pub fn validate() -> Result<Validation, SceneError> {
+    Ok(Validation {
+        table_4_1: table_4_1()?,
+        table_4_3_average: table_4_3(false)?,
+        table_4_4_accurate: table_4_3(true)?,
+        table_4_5: table_4_5()?,
+    })
+}
+
+/// One row of `host-sim inverse`: the hung mass estimated from the single measured cable's change.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InverseRow {
+    /// The mass actually hung, g.
+    pub hung_g: f64,
+    /// The observed cable change, cm.
+    pub observed_delta_cm: f64,
+    /// Estimated mass, g.
+    pub estimate_g: f64,
+    /// Its standard deviation from the ruler's resolution, g.
+    pub std_g: f64,
+    /// Estimated tip, cm.
+    pub tip: PointCm,
+    /// Its standard deviation, cm (x, y).
+    pub tip_std_cm: [f64; 2],
+    /// The observed tip (Table 4.3), cm.
+    pub observed_tip: PointCm,
+    /// Model minus measured cable length, cm.
+    pub residual_cm: f64,
+    /// Why the solve stopped.
+    pub termination: model_core::Termination,
+    /// How well the data determine the mass.
+    pub determination: model_core::inverse::Determination,
+}
+
+/// `host-sim inverse`: for each row of Table 4.5, the tip load and tip position from the observed
+/// change of the one measured cable (measured length = the model's 0 g length + the observed change),
+/// with the uncertainty implied by the ruler's resolution (the scene's `estimate.resolution_m`, 1 mm).
+pub fn inverse_table(accurate: bool) -> Result<Vec<InverseRow>, SceneError> {
+    use model_core::inverse::{InverseSettings, InverseStart, LoadBasis, estimate};
+    let scene = if accurate {
+        scenes::exp2_accurate()?
+    } else {
+        scenes::exp2_average()?
+    };
+    let model =
+        Model::<f64>::new(scene.rod()?).map_err(|e| SceneError::new("scene", e.to_string()))?;
+    let gravity = Vector3::from(scene.gravity_m_s2);
+    let g = gravity.norm();
+    let basis = LoadBasis::force_along(&gravity)
+        .map_err(|e| SceneError::new("gravity_m_s2", e.to_string()))?;
+    let settings = InverseSettings {
+        max_force_std_n: scene.estimate.max_force_std_n,
+        ..InverseSettings::with_resolution(scene.estimate.resolution_m)
+    };
+    let unloaded = solve_rows(&model, &scene, &TipLoad::zero(), &[])?;
+    let reference_m = unloaded.cables_m.first().copied().unwrap_or(f64::NAN);
+    let observed_tips: Vec<[f64; 5]> = csv_rows::<5>(reference::TABLE_4_3_CSV)
+        .collect::<Result<_, _>>()
+        .map_err(table_error)?;
+    let mut rows = Vec::new();
+    for row in csv_rows::<7>(reference::TABLE_4_5_CSV) {
+        let row = row.map_err(table_error)?;
+        let (hung_g, delta_cm) = (row[0], row[2]);
+        let measured = [reference_m + delta_cm / CM_PER_M];
+        let est = estimate(
+            &model,
+            &basis,
+            &measured,
+            InverseStart::Params(nalgebra::Vector1::new(0.0)),
+            &settings,
+        )
+        .map_err(|e| SceneError::new("cable length", e.to_string()))?;
+        let observed = observed_tips
+            .iter()
+            .find(|t| (t[0] - hung_g).abs() < 1e-9)
+            .map_or(
+                PointCm {
+                    x: f64::NAN,
+                    y: f64::NAN,
+                },
+                |t| PointCm { x: t[1], y: t[2] },
+            );
+        rows.push(InverseRow {
+            hung_g,
+            observed_delta_cm: delta_cm,
+            estimate_g: est.params[0] / g / KG_PER_G,
+            std_g: est.quality.param_std[0] / g / KG_PER_G,
+            tip: PointCm::from_m(&est.tip_position_m),
+            tip_std_cm: [
+                est.quality.tip_std_m.x * CM_PER_M,
+                est.quality.tip_std_m.y * CM_PER_M,
+            ],
+            observed_tip: observed,
+            residual_cm: est.cable_residual_m[0] * CM_PER_M,
+            termination: est.report.termination,
+            determination: est.quality.determination,
+        });
+    }
+    Ok(rows)
+}

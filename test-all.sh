@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Every test of the project, with the set-up a fresh machine needs (idempotent, quick when present):
+# the thumbv7em target, Debian's qemu-system-arm for the emulated MCU, and a TrueType font for plots.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"; elif command -v sudo >/dev/null; then sudo "$@"; else
+        echo "need root to run: $*" >&2; return 1; fi
+}
+
+apt_install() {
+    # apt-get update only when a package is missing.
+    local missing=()
+    for pkg in "$@"; do dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg"); done
+    if [ "${#missing[@]}" -gt 0 ]; then
+        echo "installing ${missing[*]}"
+        as_root apt-get update -qq
+        as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
+    fi
+}
+
+echo "== set-up"
+rustup target add thumbv7em-none-eabihf
+apt_install qemu-system-arm fonts-dejavu-core
+
+echo "== host tests (model-core in f64 and f32, host-sim, cross-crate)"
+cargo test --workspace
+
+echo "== model-core builds without std for the MCU"
+cargo build -p model-core --target thumbv7em-none-eabihf
+
+echo "== firmware (host tests of its library, QEMU images, size budget)"
+firmware/test.sh
+
+echo "== all tests passed"
