@@ -12,7 +12,7 @@
 //! `dn_l = n_l x dtheta + R^T dn`, `dv = D^-1 dn_l`, `dr' = R (dtheta x v + dv)`,
 //! `dtheta' = du - u x dtheta`, `du' = -C^-1 (du x C u + u x C du + dv x n_l + v x dn_l)`.
 
-// Every index below runs over a const-sized array of the same length (`array::from_fn`, `0..K`, `MAX_CABLES`).
+// Every index below runs over const-sized arrays of the same length (`0..K`, `MAX_CABLES`).
 #![allow(clippy::indexing_slicing)]
 
 use core::array;
@@ -82,6 +82,16 @@ struct Tangent<T> {
     u: Vector3<T>,
 }
 
+impl<T: Scalar> Tangent<T> {
+    fn zero() -> Self {
+        Self {
+            r: Vector3::zeros(),
+            th: Vector3::zeros(),
+            u: Vector3::zeros(),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Point<T: Scalar, A, const K: usize> {
     r: Vector3<T>,
@@ -122,8 +132,9 @@ fn rates<T: Scalar, A: Attitude<T>, const K: usize>(
     let nl = m.tr_mul(&n);
     let v = f.comp.shear_strain(&nl, f.kirchhoff);
     let cu = f.comp.c.component_mul(&p.u);
-    let tan = array::from_fn(|j| {
-        let (t, dnj) = (&p.tan[j], &dn[j]);
+    // Plain loops, not `array::from_fn`: its closure does not inline here and cost a third of a sweep.
+    let mut tan = [Tangent::zero(); K];
+    for ((out, t), dnj) in tan.iter_mut().zip(&p.tan).zip(dn) {
         let dnl = nl.cross(&t.th) + m.tr_mul(dnj);
         let dv = if f.kirchhoff {
             Vector3::zeros()
@@ -131,15 +142,15 @@ fn rates<T: Scalar, A: Attitude<T>, const K: usize>(
             f.comp.d_inv.component_mul(&dnl)
         };
         let cdu = f.comp.c.component_mul(&t.u);
-        Tangent {
+        *out = Tangent {
             r: m * (t.th.cross(&v) + dv),
             th: t.u - p.u.cross(&t.th),
             u: -f
                 .comp
                 .c_inv
                 .component_mul(&(t.u.cross(&cu) + p.u.cross(&cdu) + dv.cross(&nl) + v.cross(&dnl))),
-        }
-    });
+        };
+    }
     Rates {
         r: m * v,
         att: p.att.rate(&m, &p.u),
@@ -154,11 +165,13 @@ fn add_tangents<T: Scalar, const K: usize>(
     k: &[Tangent<T>; K],
     h: T,
 ) -> [Tangent<T>; K] {
-    array::from_fn(|j| Tangent {
-        r: a[j].r + k[j].r * h,
-        th: a[j].th + k[j].th * h,
-        u: a[j].u + k[j].u * h,
-    })
+    let mut out = *a;
+    for (o, k) in out.iter_mut().zip(k) {
+        o.r += k.r * h;
+        o.th += k.th * h;
+        o.u += k.u * h;
+    }
+    out
 }
 
 #[inline]
@@ -191,19 +204,13 @@ fn rk4_step<T: Scalar, A: Attitude<T>, const K: usize>(
     let k3 = rates(f, dn, s + half, &stage(p, &k2, half));
     let k4 = rates(f, dn, s + h, &stage(p, &k3, h));
     let (w1, w2) = (h / T::lit(6.0), h / T::lit(3.0));
-    let tan = array::from_fn(|j| {
-        let t = |x: &Tangent<T>, y: &Tangent<T>, z: &Tangent<T>, w: &Tangent<T>| Tangent {
-            r: (x.r + w.r) * w1 + (y.r + z.r) * w2,
-            th: (x.th + w.th) * w1 + (y.th + z.th) * w2,
-            u: (x.u + w.u) * w1 + (y.u + z.u) * w2,
-        };
-        let d = t(&k1.tan[j], &k2.tan[j], &k3.tan[j], &k4.tan[j]);
-        Tangent {
-            r: p.tan[j].r + d.r,
-            th: p.tan[j].th + d.th,
-            u: p.tan[j].u + d.u,
-        }
-    });
+    let mut tan = p.tan;
+    for (j, t) in tan.iter_mut().enumerate() {
+        let (a, b, c, d) = (&k1.tan[j], &k2.tan[j], &k3.tan[j], &k4.tan[j]);
+        t.r += (a.r + d.r) * w1 + (b.r + c.r) * w2;
+        t.th += (a.th + d.th) * w1 + (b.th + c.th) * w2;
+        t.u += (a.u + d.u) * w1 + (b.u + c.u) * w2;
+    }
     let (r, lo) = compensated_add(&p.r, &((k1.r + k4.r) * w1 + (k2.r + k3.r) * w2));
     Point {
         r,
@@ -267,7 +274,10 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     ) {
         let arm = m * offset;
         let hole = (*r.0, *r.1, arm);
-        let d_hole: [Vector3<T>; K] = array::from_fn(|j| tan[j].r + m * tan[j].th.cross(offset));
+        let mut d_hole = [Vector3::zeros(); K];
+        for (d, t) in d_hole.iter_mut().zip(tan) {
+            *d = t.r + m * t.th.cross(offset);
+        }
         if self.started {
             let chord = (hole.0 - self.prev.0) + (hole.1 - self.prev.1) + (hole.2 - self.prev.2);
             let len = chord.norm_squared().sqrt_hot();

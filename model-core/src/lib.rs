@@ -17,6 +17,7 @@
 //! | one RK4 sweep with forward sensitivities | `integrate` |
 //! | cable lengths (ch. 3.8.1) | [`rod::Cable`], summed in `integrate` |
 //! | the shooting solve, load continuation | [`shooting`] |
+//! | the planar reduction (in-plane loads) | [`planar`] |
 //! | elastic stability of an equilibrium (Jacobi fields) | [`stability`] |
 //! | the inverse: tip load from cable lengths | [`inverse`] |
 //! | shape output | [`shape`] |
@@ -42,6 +43,7 @@ pub mod kinematics;
 pub mod mass;
 pub mod model;
 pub mod plan;
+pub mod planar;
 pub mod reference;
 pub mod report;
 pub mod rod;

@@ -679,6 +679,54 @@ pub fn ten_times_heaviest_load<T: Scalar>() -> Outcome {
     )
 }
 
+/// The planar reduction of the thesis bench (every load in the vertical plane) gives the 3D answer:
+/// tip and cable lengths, on the same grid; and a load out of the plane is not reduced.
+pub fn planar_reduction_matches_3d<T: Scalar>() -> Outcome {
+    let model = ok(
+        "model",
+        Model::<T>::new(ok(
+            "bench",
+            reference::exp2_bench(Exp2Mass::Accurate, 60, 3),
+        )?),
+    )?;
+    let settings = ShootingSettings::default();
+    for grams in [0.0, 40.2, 83.2] {
+        let load = TipLoad::force(lit3([0.0, -grams * 1e-3 * reference::GRAVITY_M_S2, 0.0]));
+        let full = solved(&model, &load)?;
+        let planar = crate::planar::PlanarModel::new(&model, &load).ok_or(Failure {
+            check: "scene is planar",
+            value: 0.0,
+            limit: 1.0,
+        })?;
+        let reduced = ok("planar solve input", planar.solve(&load, &settings))?;
+        holds(
+            "planar solve converged",
+            reduced.report.termination.is_success(),
+        )?;
+        within(
+            "tip difference, m",
+            f64s(&(full.tip_position_m - reduced.tip_position_m)).norm(),
+            tol::<T>(1e-8, 2e-6),
+        )?;
+        for (a, b) in full
+            .cable_lengths_m
+            .iter()
+            .zip(reduced.cable_lengths_m.iter())
+        {
+            within(
+                "cable difference, m",
+                (a.to_f64() - b.to_f64()).abs(),
+                tol::<T>(1e-8, 2e-6),
+            )?;
+        }
+    }
+    let sideways = TipLoad::force(lit3([0.0, -0.1, 0.05]));
+    holds(
+        "out-of-plane load not reduced",
+        crate::planar::PlanarModel::new(&model, &sideways).is_none(),
+    )
+}
+
 /// Invalid inputs come back as typed errors, never a panic or a wrong answer.
 pub fn invalid_inputs_are_refused<T: Scalar>() -> Outcome
 where
@@ -796,7 +844,7 @@ where
 }
 
 /// Every case, in a fixed order.
-pub fn cases<T: Scalar>() -> [Case; 18]
+pub fn cases<T: Scalar>() -> [Case; 19]
 where
     Params: ParamCount<T, 1> + ParamCount<T, 3>,
 {
@@ -868,6 +916,10 @@ where
         Case {
             name: "10x heaviest thesis load stays on branch",
             run: ten_times_heaviest_load::<T>,
+        },
+        Case {
+            name: "planar reduction matches 3D",
+            run: planar_reduction_matches_3d::<T>,
         },
         Case {
             name: "invalid inputs refused with typed errors",
