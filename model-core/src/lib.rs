@@ -18,6 +18,7 @@
 //! | cable lengths (ch. 3.8.1) | [`rod::Cable`], summed in `integrate` |
 //! | the shooting solve, load continuation | [`shooting`] |
 //! | the planar reduction (in-plane loads) | [`planar`] |
+//! | picking the cheapest variant that meets a tolerance | [`reduction`] |
 //! | elastic stability of an equilibrium (Jacobi fields) | [`stability`] |
 //! | the inverse: tip load from cable lengths | [`inverse`] |
 //! | shape output | [`shape`] |
@@ -44,6 +45,7 @@ pub mod mass;
 pub mod model;
 pub mod plan;
 pub mod planar;
+pub mod reduction;
 pub mod reference;
 pub mod report;
 pub mod rod;

@@ -72,9 +72,11 @@ impl<T: Scalar> Plan<T> {
             end += section.length_m;
             push(end)?;
         }
+        // Without gravity the mass distribution plays no part: guide edges are not breakpoints.
+        let weighted = rod.gravity_m_s2 != Vector3::zeros();
         for guide in &rod.guides {
             push(guide.s_m)?;
-            if guide_is_segment(rod, guide) {
+            if weighted && guide_is_segment(rod, guide) {
                 let half = guide.thickness_m * T::lit(0.5);
                 push(guide.s_m - half)?;
                 push(guide.s_m + half)?;

@@ -727,6 +727,41 @@ pub fn planar_reduction_matches_3d<T: Scalar>() -> Outcome {
     )
 }
 
+/// The model picker: for the in-plane thesis bench it takes the planar reduction, its measured error
+/// meets the requested tolerance, it costs no more than the full model, and a tighter tolerance
+/// never gets a cheaper pick.
+pub fn reduction_meets_tolerance<T: Scalar>() -> Outcome {
+    let rod = ok(
+        "bench",
+        reference::exp2_bench::<T>(Exp2Mass::Accurate, 100, 3),
+    )?;
+    let load = TipLoad::force(lit3([0.0, -0.0402 * reference::GRAVITY_M_S2, 0.0]));
+    let settings = ShootingSettings::default();
+    let mut previous_cost = 0;
+    for tolerance in [1e-3, 1e-5] {
+        let choice = ok(
+            "choice",
+            crate::reduction::choose(&rod, &load, T::lit(tolerance), &settings),
+        )?;
+        holds("planar picked for an in-plane scene", choice.variant.planar)?;
+        within(
+            "measured error over the tolerance",
+            choice.error_m.to_f64() / tolerance,
+            1.0,
+        )?;
+        holds(
+            "no dearer than the full model",
+            choice.cost <= choice.full_cost,
+        )?;
+        holds(
+            "a tighter tolerance costs at least as much",
+            choice.cost >= previous_cost,
+        )?;
+        previous_cost = choice.cost;
+    }
+    Ok(())
+}
+
 /// Invalid inputs come back as typed errors, never a panic or a wrong answer.
 pub fn invalid_inputs_are_refused<T: Scalar>() -> Outcome
 where
@@ -844,7 +879,7 @@ where
 }
 
 /// Every case, in a fixed order.
-pub fn cases<T: Scalar>() -> [Case; 19]
+pub fn cases<T: Scalar>() -> [Case; 20]
 where
     Params: ParamCount<T, 1> + ParamCount<T, 3>,
 {
@@ -920,6 +955,10 @@ where
         Case {
             name: "planar reduction matches 3D",
             run: planar_reduction_matches_3d::<T>,
+        },
+        Case {
+            name: "model picker meets the tolerance",
+            run: reduction_meets_tolerance::<T>,
         },
         Case {
             name: "invalid inputs refused with typed errors",
