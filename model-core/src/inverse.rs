@@ -1060,7 +1060,8 @@ pub struct EstimatorSettings<T> {
     /// The inverse solve's settings, for the first (cold) estimate and every update.
     pub inverse: InverseSettings<T>,
     /// Most sweeps one update may take (its cost bound). The first is a plain sweep; the others carry
-    /// six tangents and cost about 2.2 plain sweeps each.
+    /// six tangents and cost about four plain sweeps each. With `1`, every update is exactly one sweep
+    /// with six tangents and one Newton step (see [`Estimator::update`]): the hard real-time mode.
     pub max_sweeps: u8,
 }
 
@@ -1121,10 +1122,8 @@ where
         start_params: SVector<T, P>,
         settings: EstimatorSettings<T>,
     ) -> Result<(Self, Estimate<T, P>), ModelError> {
-        if settings.max_sweeps < 2 {
-            return Err(ModelError::OutOfRange(
-                "estimator sweep budget (at least 2)",
-            ));
+        if settings.max_sweeps == 0 {
+            return Err(ModelError::NotPositive("estimator sweep budget"));
         }
         let first = estimate(
             model,
@@ -1162,10 +1161,20 @@ where
     }
 
     /// One estimate for new measurements (one per cable, m), warm-started from the last.
+    ///
+    /// With a budget of one sweep ([`EstimatorSettings::max_sweeps`] `= 1`) the update is exactly one
+    /// sweep with six tangents at the last estimate, for the new measurements, and one Newton step
+    /// from it: the cost is fixed, and the estimate returned is the one after the step, its tip and
+    /// cable lengths predicted linearly (the error is second order in the change since the last
+    /// update, and the next update measures it). It reports [`Termination::Converged`] when the
+    /// last estimate already met the tolerances, [`Termination::IterationLimit`] when it took a step.
     pub fn update(&mut self, measured_m: &[T]) -> Result<Estimate<T, P>, ModelError> {
         let problem = self.problem(validate_measurements(self.model, measured_m)?);
         let mut work = crate::shooting::Work::default();
         let budget = u16::from(self.settings.max_sweeps);
+        if budget == 1 {
+            return Ok(self.one_step(&problem, work));
+        }
 
         // The residual at the last estimate for the new measurements; the Jacobian is the last one.
         work.sweeps += 1;
@@ -1218,6 +1227,43 @@ where
             self.stability = self.verdict(&problem);
             exact = true;
         }
+    }
+
+    /// The hard real-time update: one exact linearisation at the last estimate, one Newton step.
+    fn one_step(
+        &mut self,
+        problem: &Problem<'_, T, A, P>,
+        mut work: crate::shooting::Work,
+    ) -> Estimate<T, P> {
+        work.sweeps = 1;
+        let sw = problem.full_sweep(&self.x);
+        if !sw.finite {
+            return problem.finish(self.x, &self.lin, Termination::NonFinite, work);
+        }
+        self.lin = problem.linearize(&self.x, &sw);
+        self.stability = self.verdict(problem);
+        let Some(red) = problem.reduce(&self.lin) else {
+            return self.finish(problem, Termination::Singular, work);
+        };
+        if problem.converged(&self.x, &self.lin, &red, None).0 {
+            return self.finish(problem, Termination::Converged, work);
+        }
+        let Some((du, dp)) = problem.step(&red, &self.x.p, T::zero()) else {
+            return self.finish(problem, Termination::Singular, work);
+        };
+        work.iterations = 1;
+        // The state after the step, predicted by the exact linearisation just taken.
+        let lin = &mut self.lin;
+        lin.e += lin.j_eu * du + lin.j_ep * dp;
+        lin.rc += lin.j_cu * du + lin.j_cp * dp;
+        lin.tip_position_m += lin.d_tip_u * du + lin.d_tip_p * dp;
+        self.x = Point {
+            u0: self.x.u0 + du,
+            p: self.x.p + dp,
+        };
+        let mut out = problem.finish(self.x, &self.lin, Termination::IterationLimit, work);
+        out.report.stability = self.stability;
+        out
     }
 
     fn verdict(&self, problem: &Problem<'_, T, A, P>) -> Stability<T> {
