@@ -22,7 +22,7 @@ apt_install() {
 
 echo "== set-up"
 rustup target add thumbv7em-none-eabihf
-apt_install qemu-system-arm fonts-dejavu-core
+apt_install qemu-system-arm binutils fonts-dejavu-core
 
 echo "== host tests (model-core in f64 and f32, host-sim, cross-crate)"
 cargo test --workspace

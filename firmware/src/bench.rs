@@ -1,0 +1,239 @@
+//! Instruction-count benchmarks of the model on the golden bench, target-agnostic: the `bench` image
+//! measures with SysTick under QEMU's `-icount` (deterministic), the host test checks the cases run
+//! and converge.
+//!
+//! Cases, each at several step counts:
+//! * `sweep`: one plain forward sweep (`Model::evaluate`),
+//! * `forward_cold`: a cold forward solve (`Model::solve`, `Start::Cold`),
+//! * `inverse_cold`: a cold inverse estimate (`Estimator::new`: a cold forward solve, then
+//!   Gauss-Newton),
+//! * `update_warm`: warm `Estimator::update`s along the recorded trajectory's force path with the
+//!   loop's sweep budget (the costliest of [`WARM_TICKS`] ticks is reported, with the worst tip error
+//!   against a forward solve of the same model),
+//! * `update_one_sweep`: the same with a budget of one sweep (model-core's hard real-time mode: one
+//!   six-tangent sweep and one Newton step per update).
+
+use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
+use model_core::reference::golden_bench;
+use model_core::{Model, ModelError, ShootingSettings, Start, Termination, TipLoad};
+use nalgebra::Vector3;
+
+use crate::config::loop_config;
+use crate::fixture::REFERENCE;
+
+/// Step counts benchmarked (RK4 steps over the rod's one section).
+pub const STEP_COUNTS: [u16; 3] = [10, 20, 40];
+
+/// Warm updates measured per step count: ticks 1..=WARM_TICKS of the recorded force path.
+pub const WARM_TICKS: usize = 8;
+
+/// One measured case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BenchLine {
+    /// The case (`sweep`, `forward_cold`, `inverse_cold`, `update_warm`).
+    pub case: &'static str,
+    /// Steps per section asked for.
+    pub steps_per_section: u16,
+    /// RK4 steps the plan takes over the rod.
+    pub total_steps: u32,
+    /// The measurement, in the caller's units (instructions on QEMU).
+    pub cost: u64,
+    /// Sweeps the case took (the costliest update's, for `update_warm`).
+    pub sweeps: u16,
+    /// Whether it converged (every update, for `update_warm`).
+    pub converged: bool,
+    /// Tip error against a forward solve of the same model, m (0 where not applicable).
+    pub tip_error_m: f32,
+}
+
+fn force(tick: usize) -> Vector3<f32> {
+    let f = REFERENCE.get(tick).map_or([0.0; 3], |t| t.force_n);
+    Vector3::new(f[0] as f32, f[1] as f32, f[2] as f32)
+}
+
+fn lengths(eq: &model_core::Equilibrium<f32>) -> [f32; 3] {
+    let mut out = [0.0f32; 3];
+    for (dst, src) in out.iter_mut().zip(eq.cable_lengths_m.iter()) {
+        *dst = *src;
+    }
+    out
+}
+
+/// Runs every case; `measure` runs a closure and returns its cost, `report` receives each line.
+///
+/// # Errors
+/// [`ModelError`] if the bench or an input is refused (it is not, for these constants).
+pub fn run(
+    measure: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+    report: &mut dyn FnMut(&BenchLine),
+) -> Result<(), ModelError> {
+    let settings = ShootingSettings::default();
+    for steps in STEP_COUNTS {
+        let model = Model::<f32>::new(golden_bench(steps)?)?;
+        let total_steps = model.plan().total_steps();
+        let line = |case, cost, sweeps, converged, tip_error_m| BenchLine {
+            case,
+            steps_per_section: steps,
+            total_steps,
+            cost,
+            sweeps,
+            converged,
+            tip_error_m,
+        };
+        let load = TipLoad::force(force(0));
+
+        // A reference solve (not measured) gives a realistic base strain for the plain sweep.
+        let reference = model.solve(&load, Start::Cold, &settings)?;
+        let mut evaluation = None;
+        let cost = measure(&mut || {
+            evaluation = Some(model.evaluate(&reference.base_strain_per_m, &load));
+        });
+        let swept = evaluation.is_some_and(|e| e.is_ok());
+        report(&line("sweep", cost, 1, swept, 0.0));
+
+        let mut cold = None;
+        let cost = measure(&mut || cold = Some(model.solve(&load, Start::Cold, &settings)));
+        let cold = cold.unwrap_or(Err(ModelError::Empty("measurement")))?;
+        report(&line(
+            "forward_cold",
+            cost,
+            cold.report.sweeps,
+            cold.report.termination.is_success(),
+            0.0,
+        ));
+
+        let estimator_settings = loop_config().estimator;
+        let measured = lengths(&reference);
+        let mut first = None;
+        let cost = measure(&mut || {
+            first = Some(Estimator::new(
+                &model,
+                LoadBasis::tip_force(),
+                &measured,
+                Vector3::zeros(),
+                estimator_settings,
+            ));
+        });
+        let (_, estimate) = first.unwrap_or(Err(ModelError::Empty("measurement")))?;
+        let tip_error = (estimate.tip_position_m - reference.tip_position_m).norm();
+        report(&line(
+            "inverse_cold",
+            cost,
+            estimate.report.sweeps,
+            estimate.report.termination.is_success(),
+            tip_error,
+        ));
+
+        for (case, max_sweeps) in [
+            ("update_warm", estimator_settings.max_sweeps),
+            ("update_one_sweep", 1),
+        ] {
+            let (mut estimator, _) = Estimator::new(
+                &model,
+                LoadBasis::tip_force(),
+                &measured,
+                Vector3::zeros(),
+                EstimatorSettings {
+                    max_sweeps,
+                    ..estimator_settings
+                },
+            )?;
+            let mut worst = Worst::default();
+            let mut start = Start::Warm(reference.base_strain_per_m);
+            for tick in 1..=WARM_TICKS {
+                let truth = model.solve(&TipLoad::force(force(tick)), start, &settings)?;
+                start = Start::Warm(truth.base_strain_per_m);
+                let measured = lengths(&truth);
+                let mut update = None;
+                let cost = measure(&mut || update = Some(estimator.update(&measured)));
+                let estimate = update.unwrap_or(Err(ModelError::Empty("measurement")))?;
+                // A one-sweep update stops at its step by design: it counts as done.
+                let done = estimate.report.termination == Termination::Converged
+                    || (max_sweeps == 1
+                        && estimate.report.termination == Termination::IterationLimit);
+                worst.add(
+                    cost,
+                    estimate.report.sweeps,
+                    done,
+                    (estimate.tip_position_m - truth.tip_position_m).norm(),
+                );
+            }
+            report(&line(
+                case,
+                worst.cost,
+                worst.sweeps,
+                worst.all_done,
+                worst.tip_error_m,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The worst of a series of updates.
+#[derive(Debug)]
+struct Worst {
+    cost: u64,
+    sweeps: u16,
+    all_done: bool,
+    tip_error_m: f32,
+}
+
+impl Default for Worst {
+    fn default() -> Self {
+        Self {
+            cost: 0,
+            sweeps: 0,
+            all_done: true,
+            tip_error_m: 0.0,
+        }
+    }
+}
+
+impl Worst {
+    fn add(&mut self, cost: u64, sweeps: u16, done: bool, tip_error_m: f32) {
+        self.cost = self.cost.max(cost);
+        self.sweeps = self.sweeps.max(sweeps);
+        self.all_done &= done;
+        self.tip_error_m = self.tip_error_m.max(tip_error_m);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_case_runs_and_converges() -> Result<(), ModelError> {
+        let mut lines = Vec::new();
+        let mut calls = 0u64;
+        run(
+            &mut |f| {
+                calls += 1;
+                f();
+                calls
+            },
+            &mut |l| lines.push(*l),
+        )?;
+        assert_eq!(lines.len(), 5 * STEP_COUNTS.len());
+        for l in &lines {
+            println!("{l:?}");
+            assert!(l.converged, "{l:?}");
+            // The warm path tracks the forward solution to well under the 0.1 mm target; the
+            // one-sweep update, a linear prediction one tick behind, within it.
+            let limit = if l.case == "update_one_sweep" {
+                1e-4
+            } else {
+                5e-5
+            };
+            assert!(l.tip_error_m < limit, "{l:?}");
+        }
+        // 22 steps at 20 per section: one per guide interval beyond the section's own.
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.steps_per_section == 20 && l.total_steps == 22)
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,305 @@
+//! The checks the QEMU images run, target-agnostic so that the host tests run the same code.
+//!
+//! * [`run_trajectory`]: the recorded encoder trajectory ([`crate::fixture::ANGLE_COUNTS`]) through spool
+//!   encoders and the estimator loop, each tick against the f64 reference, with a sensor fault and a
+//!   jump injected on the way (both must be refused and the last estimate kept).
+//! * [`run_golden`]: the golden 3D rows, from their cable lengths alone.
+
+use model_core::reference::golden_rows;
+use model_core::{Model, ModelError, Termination};
+
+use crate::config::{MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
+use crate::control::{EstimatorLoop, Status, TickRecord, read_all};
+use crate::encoder::replay::ReplayError;
+use crate::encoder::{SpoolEncoder, SpoolError};
+use crate::fixture::{
+    JUMP_TICK, REFERENCE, RecordedSensor, Reference, SENSOR_FAULT_TICK, TICK_COUNT,
+};
+use crate::spool::CalibrationError;
+use crate::validate::Rejection;
+use model_core::inverse::{Estimator, LoadBasis};
+use nalgebra::Vector3;
+
+/// Largest tip error against the f64 reference, m (0.1 mm).
+pub const TIP_TOLERANCE_M: f64 = 1.0e-4;
+
+/// Largest tip force error against the applied force, N. The cables determine the force to about
+/// 1-2 mN (the estimate's own standard deviation at 1.9 um per count); the warm loop adds its lag.
+pub const FORCE_TOLERANCE_N: f64 = 5.0e-3;
+
+/// Why a check could not start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum SetupError {
+    /// The model or the loop refused its configuration.
+    Model(ModelError),
+    /// A spool calibration was refused.
+    Calibration(CalibrationError),
+}
+
+impl From<ModelError> for SetupError {
+    fn from(e: ModelError) -> Self {
+        Self::Model(e)
+    }
+}
+
+impl From<CalibrationError> for SetupError {
+    fn from(e: CalibrationError) -> Self {
+        Self::Calibration(e)
+    }
+}
+
+/// What a tick of the trajectory was expected to do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum Expected {
+    /// A fresh estimate within tolerance.
+    Fresh,
+    /// The injected sensor fault refused, the last estimate kept.
+    SensorFault,
+    /// The injected jump refused, the last estimate kept.
+    Jump,
+}
+
+/// One tick's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
+pub struct TickCheck {
+    /// The tick.
+    pub tick: u32,
+    /// What it had to do.
+    pub expected: Expected,
+    /// What the loop said.
+    pub status: Status<SpoolError<ReplayError>>,
+    /// The tick of the estimate the loop reported (`None` if it had none).
+    pub estimate_tick: Option<u32>,
+    /// Tip error of that estimate against the reference at its own tick, m.
+    pub tip_error_m: f64,
+    /// Force error of that estimate against the applied force at its own tick, N.
+    pub force_error_n: f64,
+    /// Sweeps the estimate took.
+    pub sweeps: u16,
+    /// The tick's cost (reading the encoders, the loop's tick) in the caller's clock units.
+    pub cost: u64,
+    /// Whether the tick did what was expected, within tolerance.
+    pub passed: bool,
+}
+
+/// The tally of a check.
+#[derive(Clone, Copy, Debug, Default, PartialEq, defmt::Format)]
+pub struct Summary {
+    /// Cases (ticks or rows) that passed.
+    pub passed: usize,
+    /// Cases that failed.
+    pub failed: usize,
+    /// Worst tip error, m.
+    pub worst_tip_error_m: f64,
+    /// Worst force error, N.
+    pub worst_force_error_n: f64,
+    /// Most sweeps one estimate took.
+    pub max_sweeps: u16,
+    /// The costliest warm tick (every tick but the first), in the caller's clock units.
+    pub max_warm_cost: u64,
+}
+
+impl Summary {
+    fn add(&mut self, passed: bool, tip_error_m: f64, force_error_n: f64, sweeps: u16) {
+        if passed {
+            self.passed += 1;
+        } else {
+            self.failed += 1;
+        }
+        self.worst_tip_error_m = self.worst_tip_error_m.max(tip_error_m);
+        self.worst_force_error_n = self.worst_force_error_n.max(force_error_n);
+        self.max_sweeps = self.max_sweeps.max(sweeps);
+    }
+}
+
+fn distance(a: [f32; 3], b: [f64; 3]) -> f64 {
+    let d = a.iter().zip(b).map(|(x, y)| {
+        let e = f64::from(*x) - y;
+        e * e
+    });
+    libm_sqrt(d.sum())
+}
+
+/// `sqrt` without std: nalgebra's, which is libm's.
+fn libm_sqrt(x: f64) -> f64 {
+    <f64 as nalgebra::ComplexField>::sqrt(x)
+}
+
+fn errors(record: &TickRecord, reference: &Reference) -> (f64, f64) {
+    (
+        distance(record.tip_position_m, reference.tip_m),
+        distance(record.tip_force_n, reference.force_n),
+    )
+}
+
+/// Replays the recorded trajectory through three spool encoders and the estimator loop on `model`,
+/// calling `report` with each tick's verdict. `clock` measures each tick's cost (an instruction
+/// counter on the MCU; anything monotonic, or a constant, on the host).
+///
+/// # Errors
+/// [`SetupError`] when the loop or a spool refuses its configuration.
+pub fn run_trajectory(
+    model: &Model<f32>,
+    clock: &dyn Fn() -> u64,
+    mut report: impl FnMut(&TickCheck),
+) -> Result<Summary, SetupError> {
+    let mut estimator = EstimatorLoop::new(model, loop_config())?;
+    let [s0, s1, s2] = spools::<f32>();
+    let spool = |cable, calibration| {
+        SpoolEncoder::new(
+            RecordedSensor::new(cable),
+            calibration,
+            MAX_UNWRAP_STEP_COUNTS,
+        )
+    };
+    let mut sources = [spool(0, s0)?, spool(1, s1)?, spool(2, s2)?];
+    let mut summary = Summary::default();
+    for tick in 0..TICK_COUNT {
+        let start = clock();
+        let readings = read_all(&mut sources);
+        let out = estimator.tick(&readings);
+        let cost = clock().saturating_sub(start);
+        if tick > 0 {
+            summary.max_warm_cost = summary.max_warm_cost.max(cost);
+        }
+        let expected = match tick {
+            SENSOR_FAULT_TICK => Expected::SensorFault,
+            JUMP_TICK => Expected::Jump,
+            _ => Expected::Fresh,
+        };
+        let status_ok = matches!(
+            (expected, out.status),
+            (Expected::Fresh, Status::Fresh)
+                | (
+                    Expected::SensorFault,
+                    Status::Rejected(Rejection::Source {
+                        cable: 1,
+                        error: SpoolError::Sensor(ReplayError::Injected),
+                    })
+                )
+                | (
+                    Expected::Jump,
+                    Status::Rejected(Rejection::Jump { cable: 2, .. })
+                )
+        );
+        // A fresh estimate is this tick's; a refused tick must keep the previous tick's.
+        let wanted_tick = match expected {
+            Expected::Fresh => tick,
+            _ => tick.saturating_sub(1),
+        };
+        let record = out.estimate.filter(|r| r.tick as usize == wanted_tick);
+        let (tip_error_m, force_error_n, sweeps) = match (&record, REFERENCE.get(wanted_tick)) {
+            (Some(r), Some(reference)) => {
+                let (tip, force) = errors(r, reference);
+                (tip, force, r.sweeps)
+            }
+            _ => (f64::INFINITY, f64::INFINITY, 0),
+        };
+        let passed =
+            status_ok && tip_error_m <= TIP_TOLERANCE_M && force_error_n <= FORCE_TOLERANCE_N;
+        summary.add(passed, tip_error_m, force_error_n, sweeps);
+        report(&TickCheck {
+            tick: out.tick,
+            expected,
+            status: out.status,
+            estimate_tick: out.estimate.map(|r| r.tick),
+            tip_error_m,
+            force_error_n,
+            sweeps,
+            cost,
+            passed,
+        });
+    }
+    Ok(summary)
+}
+
+/// One golden row's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
+pub struct RowCheck {
+    /// The row, counting from 0.
+    pub row: usize,
+    /// How the cold estimate ended.
+    pub termination: Termination,
+    /// Tip error against the golden tip, m.
+    pub tip_error_m: f64,
+    /// Force error against the golden force, N.
+    pub force_error_n: f64,
+    /// Standard deviation of the force the estimate reports (largest component), N.
+    pub force_std_n: f64,
+    /// Sweeps the estimate took.
+    pub sweeps: u16,
+    /// Converged, and the tip within [`TIP_TOLERANCE_M`].
+    pub passed: bool,
+}
+
+/// The f32 estimator's cold estimate (the loop's first tick) for each golden row's cable lengths,
+/// calling `report` with each row's verdict.
+///
+/// # Errors
+/// [`SetupError`] when the estimator refuses a row or its settings, or a row does not parse.
+pub fn run_golden(
+    model: &Model<f32>,
+    mut report: impl FnMut(&RowCheck),
+) -> Result<Summary, SetupError> {
+    let settings = loop_config().estimator;
+    let mut summary = Summary::default();
+    for (row, golden) in golden_rows().enumerate() {
+        let golden = golden?;
+        let lengths = golden.cables_m.map(|x| x as f32);
+        let (_, estimate) = Estimator::new(
+            model,
+            LoadBasis::tip_force(),
+            &lengths,
+            Vector3::zeros(),
+            settings,
+        )?;
+        let array = |v: &Vector3<f32>| [v.x, v.y, v.z];
+        let tip_error_m = distance(array(&estimate.tip_position_m), golden.tip_m);
+        let force_error_n = distance(array(&estimate.params), golden.force_n);
+        let termination = estimate.report.termination;
+        let passed = termination.is_success() && tip_error_m <= TIP_TOLERANCE_M;
+        summary.add(passed, tip_error_m, force_error_n, estimate.report.sweeps);
+        report(&RowCheck {
+            row,
+            termination,
+            tip_error_m,
+            force_error_n,
+            force_std_n: f64::from(estimate.quality.force_std_n.max()),
+            sweeps: estimate.report.sweeps,
+            passed,
+        });
+    }
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_trajectory_passes_on_the_host_in_f32() -> Result<(), SetupError> {
+        let model = crate::config::model()?;
+        let mut lines = Vec::new();
+        let summary = run_trajectory(&model, &|| 0, |c| lines.push(*c))?;
+        for c in &lines {
+            println!("{c:?}");
+        }
+        println!("{summary:?}");
+        assert_eq!(summary.failed, 0);
+        assert_eq!(summary.passed, TICK_COUNT);
+        // Warm ticks stay within the loop's sweep budget; only the cold first tick may take more.
+        let budget = u16::from(loop_config().estimator.max_sweeps);
+        assert!(lines.iter().skip(1).all(|c| c.sweeps <= budget));
+        assert!(summary.worst_tip_error_m < TIP_TOLERANCE_M);
+        Ok(())
+    }
+
+    #[test]
+    fn the_golden_rows_pass_on_the_host_in_f32() -> Result<(), SetupError> {
+        let model = crate::config::model()?;
+        let summary = run_golden(&model, |r| println!("{r:?}"))?;
+        assert_eq!((summary.passed, summary.failed), (4, 0));
+        assert!(summary.worst_tip_error_m < 5e-5);
+        Ok(())
+    }
+}

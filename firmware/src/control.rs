@@ -1,0 +1,290 @@
+//! The estimator loop: one [`EstimatorLoop::tick`] per control period.
+//!
+//! Readings -> validation -> warm-started f32 [`Estimator::update`] (a cold estimate on the first
+//! good tick) -> tip force, tip pose and a few backbone points. A refused reading, an input error or
+//! a solve that did not converge leaves the last good estimate in place and says why; after
+//! [`LoopConfig::restart_after`] failed solves in a row the next tick starts cold again (a warm
+//! start that lost the answer does not find it by itself). Nothing here panics.
+
+use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
+use model_core::{Model, ModelError, Quaternion, ShapePoint, Termination};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::encoder::CableLengthSource;
+use crate::validate::{CABLES, ReadingValidator, Rejection};
+
+/// Backbone points reported each tick.
+pub const SHAPE_POINTS: usize = 4;
+
+/// How the loop runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoopConfig {
+    /// Control period, s.
+    pub tick_period_s: f32,
+    /// Fastest the drives can move a cable, m/s: a reading that moved further in the elapsed ticks
+    /// is refused.
+    pub max_cable_speed_m_per_s: f32,
+    /// Added to the speed limit for quantisation and noise, m.
+    pub step_margin_m: f32,
+    /// The warm-started inverse's settings (measurement noise, sweep budget per tick). With a budget
+    /// of one sweep (model-core's hard real-time mode) every update takes one Newton step and is
+    /// used as it is: [`TickRecord::converged`] says whether it had already converged.
+    pub estimator: EstimatorSettings<f32>,
+    /// Arc lengths of the reported backbone points, m, increasing, within the rod.
+    pub shape_s_m: [f32; SHAPE_POINTS],
+    /// Failed solves in a row after which the next tick starts cold (a cold estimate costs several
+    /// ticks' worth of work, once).
+    pub restart_after: u8,
+}
+
+/// One tick's estimate: what the loop outputs.
+#[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
+pub struct TickRecord {
+    /// The tick that produced it.
+    pub tick: u32,
+    /// Tip force, N, global frame.
+    pub tip_force_n: [f32; 3],
+    /// Standard deviation of each force component, N.
+    pub force_std_n: [f32; 3],
+    /// Tip position, m, global frame.
+    pub tip_position_m: [f32; 3],
+    /// Standard deviation of each tip coordinate, m.
+    pub tip_std_m: [f32; 3],
+    /// Tip tangent (unit), global frame.
+    pub tip_tangent: [f32; 3],
+    /// Backbone positions at [`LoopConfig::shape_s_m`], m.
+    pub backbone_m: [[f32; 3]; SHAPE_POINTS],
+    /// The cable lengths it explains, m.
+    pub cable_length_m: [f32; CABLES],
+    /// Model minus measured cable length, m.
+    pub cable_residual_m: [f32; CABLES],
+    /// Sweeps the solve took (its cost).
+    pub sweeps: u16,
+    /// Whether it came from a cold start (the first estimate, or a restart).
+    pub cold: bool,
+    /// Whether the solve met its tolerances (always, except for a one-sweep update's step, whose
+    /// tip and cable lengths are predicted linearly).
+    pub converged: bool,
+    /// How well the cables determine the force.
+    pub determination: Determination,
+}
+
+/// What happened in a tick.
+#[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
+pub enum Status<E> {
+    /// A new estimate was made from this tick's readings.
+    Fresh,
+    /// A reading was refused; the readings were not used.
+    Rejected(Rejection<E>),
+    /// The solve did not converge (or converged to an unstable equilibrium) within its budget; the
+    /// next tick carries on from where it stopped.
+    NotConverged(Termination),
+    /// The model refused the input or the settings.
+    Refused(ModelError),
+}
+
+/// A tick's report: its status and the newest good estimate (this tick's when the status is
+/// [`Status::Fresh`], else the last good one; `None` until a first estimate succeeds).
+#[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
+pub struct TickReport<E> {
+    /// The tick, counting from 0.
+    pub tick: u32,
+    /// What happened.
+    pub status: Status<E>,
+    /// The newest good estimate.
+    pub estimate: Option<TickRecord>,
+}
+
+/// Reads every source once, in cable order.
+pub fn read_all<S: CableLengthSource>(
+    sources: &mut [S; CABLES],
+) -> [Result<f32, S::Error>; CABLES] {
+    let [a, b, c] = sources;
+    [
+        a.read_cable_length_m(),
+        b.read_cable_length_m(),
+        c.read_cable_length_m(),
+    ]
+}
+
+/// The estimator loop over a model of the three-cable rod.
+#[derive(Debug)]
+pub struct EstimatorLoop<'m> {
+    model: &'m Model<f32>,
+    config: LoopConfig,
+    validator: ReadingValidator,
+    estimator: Option<WarmEstimator<'m>>,
+    last: Option<TickRecord>,
+    next_tick: u32,
+    failures_in_row: u8,
+}
+
+impl<'m> EstimatorLoop<'m> {
+    /// A loop over `model` (three cables).
+    ///
+    /// # Errors
+    /// [`ModelError`] for a model without three cables or a non-positive period, speed or margin.
+    pub fn new(model: &'m Model<f32>, config: LoopConfig) -> Result<Self, ModelError> {
+        if !(config.tick_period_s.is_finite() && config.tick_period_s > 0.0) {
+            return Err(ModelError::NotPositive("tick period"));
+        }
+        let validator = ReadingValidator::new(
+            model,
+            config.max_cable_speed_m_per_s * config.tick_period_s,
+            config.step_margin_m,
+        )?;
+        Ok(Self {
+            model,
+            config,
+            validator,
+            estimator: None,
+            last: None,
+            next_tick: 0,
+            failures_in_row: 0,
+        })
+    }
+
+    /// The newest good estimate.
+    pub fn last_estimate(&self) -> Option<&TickRecord> {
+        self.last.as_ref()
+    }
+
+    /// One control tick on this tick's readings (one per cable, m, or the source's error).
+    pub fn tick<E: Copy>(&mut self, readings: &[Result<f32, E>; CABLES]) -> TickReport<E> {
+        let tick = self.next_tick;
+        self.next_tick = self.next_tick.wrapping_add(1);
+        let status = match self.validator.check(tick, readings) {
+            Err(rejection) => Status::Rejected(rejection),
+            Ok(lengths_m) => {
+                self.validator.accept(tick, lengths_m);
+                self.estimate(tick, &lengths_m)
+            }
+        };
+        TickReport {
+            tick,
+            status,
+            estimate: self.last,
+        }
+    }
+
+    fn estimate<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> Status<E> {
+        let status = self.solve(tick, lengths_m);
+        if matches!(status, Status::Fresh) {
+            self.failures_in_row = 0;
+        } else {
+            self.failures_in_row = self.failures_in_row.saturating_add(1);
+            if self.failures_in_row >= self.config.restart_after {
+                self.estimator = None;
+                self.failures_in_row = 0;
+            }
+        }
+        status
+    }
+
+    fn solve<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> Status<E> {
+        let is_cold = self.estimator.is_none();
+        let result = match &mut self.estimator {
+            Some(estimator) => warm(estimator, lengths_m),
+            None => cold(self.model, lengths_m, self.config.estimator).map(|(estimator, first)| {
+                self.estimator = Some(estimator);
+                first
+            }),
+        };
+        let estimate = match result {
+            Ok(estimate) => estimate,
+            Err(error) => return Status::Refused(error),
+        };
+        let converged = estimate.report.termination.is_success();
+        // A one-sweep update always stops at its step (`IterationLimit`); that step is its answer.
+        let one_step = !is_cold
+            && self.config.estimator.max_sweeps == 1
+            && estimate.report.termination == Termination::IterationLimit;
+        if !(converged || one_step) {
+            return Status::NotConverged(estimate.report.termination);
+        }
+        match self.record(tick, lengths_m, &estimate, is_cold, converged) {
+            Ok(record) => {
+                self.last = Some(record);
+                Status::Fresh
+            }
+            Err(error) => Status::Refused(error),
+        }
+    }
+
+    // Not inlined: its shape buffer and sweep need not share a frame with the solves'.
+    #[inline(never)]
+    fn record(
+        &self,
+        tick: u32,
+        lengths_m: &[f32; CABLES],
+        estimate: &Estimate<f32, 3>,
+        cold: bool,
+        converged: bool,
+    ) -> Result<TickRecord, ModelError> {
+        let blank = ShapePoint {
+            s_m: 0.0,
+            position_m: Vector3::zeros(),
+            rotation: Matrix3::identity(),
+            strain_per_m: Vector3::zeros(),
+        };
+        let mut points = [blank; SHAPE_POINTS];
+        self.model.shape_at(
+            &estimate.base_strain_per_m,
+            &estimate.load,
+            &self.config.shape_s_m,
+            &mut points,
+        )?;
+        let array = |v: &Vector3<f32>| [v.x, v.y, v.z];
+        let mut residual = [0.0f32; CABLES];
+        for (slot, value) in residual.iter_mut().zip(estimate.cable_residual_m.iter()) {
+            *slot = *value;
+        }
+        Ok(TickRecord {
+            tick,
+            tip_force_n: array(&estimate.params),
+            force_std_n: array(&estimate.quality.force_std_n),
+            tip_position_m: array(&estimate.tip_position_m),
+            tip_std_m: array(&estimate.quality.tip_std_m),
+            tip_tangent: array(&estimate.tip_rotation.column(2).into_owned()),
+            backbone_m: points.map(|p| array(&p.position_m)),
+            cable_length_m: *lengths_m,
+            cable_residual_m: residual,
+            sweeps: estimate.report.sweeps,
+            cold,
+            converged,
+            determination: estimate.quality.determination,
+        })
+    }
+}
+
+/// The warm-started estimator the loop keeps.
+type WarmEstimator<'m> = Estimator<'m, f32, Quaternion<f32>, 3>;
+
+/// The first estimate: a cold inverse solve. Kept out of line so that its frame (a cold forward
+/// solve with load continuation) is not added to the warm path's on the stack.
+#[inline(never)]
+fn cold<'m>(
+    model: &'m Model<f32>,
+    lengths_m: &[f32; CABLES],
+    settings: EstimatorSettings<f32>,
+) -> Result<(WarmEstimator<'m>, Estimate<f32, 3>), ModelError> {
+    Estimator::new(
+        model,
+        LoadBasis::tip_force(),
+        lengths_m,
+        Vector3::zeros(),
+        settings,
+    )
+}
+
+/// A warm update, out of line for the same reason as [`cold`].
+#[inline(never)]
+fn warm(
+    estimator: &mut WarmEstimator<'_>,
+    lengths_m: &[f32; CABLES],
+) -> Result<Estimate<f32, 3>, ModelError> {
+    estimator.update(lengths_m)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,176 @@
+//! The loop against scripted readings.
+
+use super::*;
+use crate::config::{loop_config, model};
+use crate::fixture::REFERENCE as TICKS;
+
+/// Error type of the scripted readings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+struct Garbled;
+
+fn lengths(tick: usize) -> [Result<f32, Garbled>; 3] {
+    TICKS[tick].cable_m.map(|x| Ok(x as f32))
+}
+
+fn tip_error(record: &TickRecord, tick: usize) -> f64 {
+    let r = &TICKS[tick].tip_m;
+    (0..3)
+        .map(|i| (f64::from(record.tip_position_m[i]) - r[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+#[test]
+fn good_readings_give_fresh_estimates_within_a_tenth_of_a_millimetre() -> Result<(), ModelError> {
+    let model = model()?;
+    let mut lp = EstimatorLoop::new(&model, loop_config())?;
+    for tick in 0..6 {
+        let out = lp.tick(&lengths(tick));
+        assert_eq!(out.status, Status::Fresh, "tick {tick}");
+        let record = out.estimate.expect("fresh estimate");
+        assert_eq!(record.tick as usize, tick);
+        assert!(tip_error(&record, tick) < 1e-4);
+        assert!(record.sweeps <= 3 || tick == 0);
+        // The last backbone point is the tip.
+        assert_eq!(record.backbone_m[SHAPE_POINTS - 1], record.tip_position_m);
+        // The tangent is a unit vector.
+        let n: f32 = record.tip_tangent.iter().map(|x| x * x).sum();
+        assert!((n - 1.0).abs() < 1e-5);
+    }
+    Ok(())
+}
+
+#[test]
+fn bad_readings_are_refused_with_their_reason_and_the_estimate_is_kept() -> Result<(), ModelError> {
+    let model = model()?;
+    let mut lp = EstimatorLoop::new(&model, loop_config())?;
+    assert_eq!(lp.tick(&lengths(0)).status, Status::Fresh);
+    let kept = *lp.last_estimate().expect("first estimate");
+
+    type Case = ([Result<f32, Garbled>; 3], Status<Garbled>);
+    let mut cases: Vec<Case> = Vec::new();
+    let good = lengths(1);
+    let mut garbage = good;
+    garbage[0] = Err(Garbled);
+    cases.push((
+        garbage,
+        Status::Rejected(Rejection::Source {
+            cable: 0,
+            error: Garbled,
+        }),
+    ));
+    let mut nan = good;
+    nan[2] = Ok(f32::NAN);
+    cases.push((nan, Status::Rejected(Rejection::NonFinite { cable: 2 })));
+    let mut long = good;
+    long[1] = Ok(0.75);
+    cases.push((
+        long,
+        Status::Rejected(Rejection::OutOfRange {
+            cable: 1,
+            length_m: 0.75,
+        }),
+    ));
+    let mut zero = good;
+    zero[0] = Ok(0.0);
+    cases.push((
+        zero,
+        Status::Rejected(Rejection::OutOfRange {
+            cable: 0,
+            length_m: 0.0,
+        }),
+    ));
+
+    for (readings, expected) in cases {
+        let out = lp.tick(&readings);
+        assert_eq!(out.status, expected);
+        assert_eq!(out.estimate, Some(kept), "the last good estimate is kept");
+    }
+
+    // A 3 mm jump on cable 1, after four refused ticks: the limit is five ticks of travel (2.5 mm)
+    // plus the margin.
+    let mut jump = good;
+    jump[1] = Ok(TICKS[0].cable_m[1] as f32 + 3e-3);
+    let out = lp.tick(&jump);
+    match out.status {
+        Status::Rejected(Rejection::Jump {
+            cable: 1,
+            step_m,
+            limit_m,
+        }) => {
+            assert!((step_m - 3e-3).abs() < 1e-6, "{step_m}");
+            assert!((limit_m - (5.0 * 5e-4 + 1e-5)).abs() < 1e-6, "{limit_m}");
+        }
+        other => panic!("expected a jump on cable 1, got {other:?}"),
+    }
+    assert_eq!(out.estimate, Some(kept));
+
+    // Good readings again: a fresh estimate for this tick.
+    let out = lp.tick(&lengths(1));
+    assert_eq!(out.status, Status::Fresh);
+    let record = out.estimate.expect("fresh estimate");
+    assert_eq!(record.tick, 6);
+    assert!(tip_error(&record, 1) < 1e-4);
+    Ok(())
+}
+
+#[test]
+fn a_solve_that_cannot_finish_keeps_the_last_estimate_then_restarts_cold() -> Result<(), ModelError>
+{
+    // Two sweeps a tick (the least allowed) and a force step far beyond one tick's reach: the
+    // update fails, says so, and the estimate stays; after `restart_after` failures the loop
+    // starts cold and finds the answer.
+    let model = model()?;
+    let mut config = loop_config();
+    config.estimator.max_sweeps = 2;
+    config.max_cable_speed_m_per_s = 10.0;
+    let mut lp = EstimatorLoop::new(&model, config)?;
+    assert_eq!(lp.tick(&lengths(0)).status, Status::Fresh);
+    let kept = *lp.last_estimate().expect("first estimate");
+    let out = lp.tick(&lengths(24));
+    // Out of budget, or stalled on the stale Jacobian's step: either way not converged this tick.
+    assert!(
+        matches!(
+            out.status,
+            Status::NotConverged(Termination::IterationLimit | Termination::Stalled)
+        ),
+        "{:?}",
+        out.status
+    );
+    assert_eq!(out.estimate, Some(kept));
+    let mut ticks_to_recover = 1;
+    while lp.tick(&lengths(24)).status != Status::Fresh {
+        assert_eq!(lp.last_estimate(), Some(&kept));
+        ticks_to_recover += 1;
+        assert!(ticks_to_recover <= 20, "no recovery");
+    }
+    let record = lp.last_estimate().expect("estimate");
+    assert!(tip_error(record, 24) < 1e-4);
+    // Recovered by the warm path within the failure limit, or by a cold restart just after it.
+    assert!(ticks_to_recover <= usize::from(config.restart_after) + 1);
+    assert!(record.cold || ticks_to_recover <= usize::from(config.restart_after));
+    Ok(())
+}
+
+#[test]
+fn invalid_settings_are_refused() -> Result<(), ModelError> {
+    let model = model()?;
+    let mut config = loop_config();
+    config.tick_period_s = 0.0;
+    assert_eq!(
+        EstimatorLoop::new(&model, config).err(),
+        Some(ModelError::NotPositive("tick period"))
+    );
+    // A sweep budget the estimator refuses surfaces on the first tick, as a refusal.
+    let mut config = loop_config();
+    config.estimator.max_sweeps = 0;
+    let mut lp = EstimatorLoop::new(&model, config)?;
+    let out = lp.tick(&lengths(0));
+    assert!(
+        matches!(out.status, Status::Refused(ModelError::NotPositive(_))),
+        "{:?}",
+        out.status
+    );
+    assert_eq!(out.estimate, None);
+    Ok(())
+}

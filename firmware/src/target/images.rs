@@ -1,0 +1,275 @@
+//! The bodies of the QEMU images (`src/bin/*.rs`): each prints plain text over semihosting and
+//! returns whether it passed. The closing line `N passed, N failed` is what CI reads.
+
+use cortex_m_semihosting::hprintln;
+
+use super::counter::{self, Counter};
+use super::memory;
+use crate::checks::{self, Expected};
+use crate::control::Status;
+use crate::validate::Rejection;
+
+fn report_memory() {
+    let m = memory::measure();
+    hprintln!(
+        "memory: flash {} B, static RAM {} B, stack high-water {} B, RAM total {} B",
+        m.flash_bytes,
+        m.static_ram_bytes,
+        m.stack_bytes,
+        m.ram_bytes()
+    );
+}
+
+/// Nanometres (or micronewtons) for a length in metres (force in newtons), saturating.
+fn micro(x: f64, scale: f64) -> u32 {
+    let v = x * scale;
+    if v.is_finite() && v < f64::from(u32::MAX) {
+        v as u32
+    } else {
+        u32::MAX
+    }
+}
+
+/// model-core's no_std self-checks in f32.
+pub fn selftest() -> bool {
+    hprintln!("selftest: model-core self-checks in f32 on the Cortex-M4F");
+    let (passed, failed) = model_core::selftest::run_all::<f32>(|name, outcome| match outcome {
+        Ok(()) => hprintln!("ok   {}", name),
+        Err(f) => hprintln!(
+            "FAIL {}: {} = {:e} (limit {:e})",
+            name,
+            f.check,
+            f.value,
+            f.limit
+        ),
+    });
+    report_memory();
+    hprintln!("{} passed, {} failed", passed, failed);
+    failed == 0 && passed > 0
+}
+
+fn status_name<E>(status: &Status<E>) -> &'static str {
+    match status {
+        Status::Fresh => "fresh",
+        Status::Rejected(Rejection::Source { .. }) => "rejected:source",
+        Status::Rejected(Rejection::NonFinite { .. }) => "rejected:non-finite",
+        Status::Rejected(Rejection::OutOfRange { .. }) => "rejected:out-of-range",
+        Status::Rejected(Rejection::Jump { .. }) => "rejected:jump",
+        Status::NotConverged(_) => "not-converged",
+        Status::Refused(_) => "refused",
+    }
+}
+
+/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference.
+pub fn e2e() -> bool {
+    let model = match crate::config::model() {
+        Ok(model) => model,
+        Err(e) => {
+            hprintln!("model refused: {}", e);
+            return false;
+        }
+    };
+    let Some(peripherals) = cortex_m::Peripherals::take() else {
+        return false;
+    };
+    let counter = Counter::start(peripherals.SYST);
+    hprintln!(
+        "e2e: {} recorded ticks; tolerances tip {} nm, force {} uN",
+        crate::fixture::TICK_COUNT,
+        micro(checks::TIP_TOLERANCE_M, 1e9),
+        micro(checks::FORCE_TOLERANCE_N, 1e6)
+    );
+    let clock = || counter::instructions(counter.ticks());
+    let result = checks::run_trajectory(&model, &clock, |c| {
+        let expected = match c.expected {
+            Expected::Fresh => "",
+            Expected::SensorFault => " (injected sensor fault)",
+            Expected::Jump => " (injected jump)",
+        };
+        hprintln!(
+            "tick {:2} {:22} estimate@{:2} tip_err_nm {:6} force_err_uN {:5} sweeps {} instructions {:7} {}{}",
+            c.tick,
+            status_name(&c.status),
+            c.estimate_tick.unwrap_or(u32::MAX),
+            micro(c.tip_error_m, 1e9),
+            micro(c.force_error_n, 1e6),
+            c.sweeps,
+            c.cost,
+            if c.passed { "pass" } else { "FAIL" },
+            expected
+        );
+    });
+    let summary = match result {
+        Ok(summary) => summary,
+        Err(e) => {
+            hprintln!("setup refused: {:?}", e);
+            return false;
+        }
+    };
+    hprintln!(
+        "worst tip error {} nm, worst force error {} uN, most sweeps {}, most instructions per warm tick {}",
+        micro(summary.worst_tip_error_m, 1e9),
+        micro(summary.worst_force_error_n, 1e6),
+        summary.max_sweeps,
+        summary.max_warm_cost
+    );
+    report_memory();
+    hprintln!("e2e: {} passed, {} failed", summary.passed, summary.failed);
+    summary.failed == 0 && summary.passed > 0
+}
+
+/// The golden rows from their cable lengths alone.
+pub fn golden() -> bool {
+    let model = match crate::config::model() {
+        Ok(model) => model,
+        Err(e) => {
+            hprintln!("model refused: {}", e);
+            return false;
+        }
+    };
+    hprintln!(
+        "golden: f32 cold estimate per golden row at {} steps; tolerance tip {} nm",
+        crate::config::STEPS_PER_SECTION,
+        micro(checks::TIP_TOLERANCE_M, 1e9)
+    );
+    let result = checks::run_golden(&model, |r| {
+        hprintln!(
+            "row {} {:?} tip_err_nm {:6} force_err_uN {:5} force_std_uN {:5} sweeps {:2} {}",
+            r.row,
+            r.termination,
+            micro(r.tip_error_m, 1e9),
+            micro(r.force_error_n, 1e6),
+            micro(r.force_std_n, 1e6),
+            r.sweeps,
+            if r.passed { "pass" } else { "FAIL" }
+        );
+    });
+    let summary = match result {
+        Ok(summary) => summary,
+        Err(e) => {
+            hprintln!("setup refused: {:?}", e);
+            return false;
+        }
+    };
+    hprintln!(
+        "worst tip error {} nm",
+        micro(summary.worst_tip_error_m, 1e9)
+    );
+    report_memory();
+    hprintln!(
+        "golden: {} passed, {} failed",
+        summary.passed,
+        summary.failed
+    );
+    summary.failed == 0 && summary.passed > 0
+}
+
+/// Takes the undefined-instruction trap: the HardFault handler must report it and exit with 1.
+pub fn fault() -> bool {
+    hprintln!("fault: executing an undefined instruction");
+    cortex_m::asm::udf()
+}
+
+/// Panics: the panic handler must report it and exit with 1.
+#[allow(clippy::panic)]
+pub fn panic() -> bool {
+    hprintln!("panic: panicking on purpose");
+    panic!("deliberate panic from the `panic` image")
+}
+
+/// Instruction counts of the model's building blocks (run under `-icount shift=3`).
+pub fn bench() -> bool {
+    let Some(peripherals) = cortex_m::Peripherals::take() else {
+        return false;
+    };
+    let counter = Counter::start(peripherals.SYST);
+    // The known loop checks the tick rate: 2 n instructions must read as 2 n.
+    let n = 100_000u32;
+    let loop_instructions = counter::instructions(counter.ticks_of(&mut || counter::known_loop(n)));
+    hprintln!(
+        "bench calibration instructions_expected={} instructions_measured={}",
+        2 * n,
+        loop_instructions
+    );
+    let calibrated = loop_instructions.abs_diff(u64::from(2 * n)) <= 16;
+    let mut converged = true;
+    let result = crate::bench::run(
+        &mut |f| counter::instructions(counter.ticks_of(f)),
+        &mut |l| {
+            converged &= l.converged;
+            hprintln!(
+                "bench case={} steps_per_section={} total_steps={} instructions={} sweeps={} converged={} tip_error_nm={}",
+                l.case,
+                l.steps_per_section,
+                l.total_steps,
+                l.cost,
+                l.sweeps,
+                l.converged,
+                micro(f64::from(l.tip_error_m), 1e9)
+            );
+        },
+    );
+    if let Err(e) = result {
+        hprintln!("bench refused: {}", e);
+        return false;
+    }
+    report_memory();
+    calibrated && converged
+}
+
+/// The production loop on the recorded trajectory: each tick's report goes out over defmt (RTT:
+/// decoded by `probe-rs run` on a board, unread under QEMU); the memory report and the verdict go
+/// over semihosting. Passes when every tick but the two injected faults gave a fresh estimate.
+pub fn estimator() -> bool {
+    // The model stays where `config::model` wrote it (borrowed, not moved out of the `Result`), and
+    // the loop runs in its own frame: the plan's construction and the solves never share the stack.
+    let model = crate::config::model();
+    match &model {
+        Ok(model) => run_estimator(model),
+        Err(e) => {
+            hprintln!("model refused: {}", e);
+            false
+        }
+    }
+}
+
+#[inline(never)]
+fn run_estimator(model: &model_core::Model<f32>) -> bool {
+    use crate::config::{MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
+    use crate::control::{EstimatorLoop, read_all};
+    use crate::encoder::SpoolEncoder;
+    use crate::fixture::{RecordedSensor, TICK_COUNT};
+
+    let Ok(mut estimator) = EstimatorLoop::new(model, loop_config()) else {
+        hprintln!("loop settings refused");
+        return false;
+    };
+    let [s0, s1, s2] = spools::<f32>();
+    let spool = |cable, calibration| {
+        SpoolEncoder::new(
+            RecordedSensor::new(cable),
+            calibration,
+            MAX_UNWRAP_STEP_COUNTS,
+        )
+    };
+    let (Ok(a), Ok(b), Ok(c)) = (spool(0, s0), spool(1, s1), spool(2, s2)) else {
+        hprintln!("spool calibration refused");
+        return false;
+    };
+    let mut sources = [a, b, c];
+    let mut fresh = 0usize;
+    for _ in 0..TICK_COUNT {
+        let report = estimator.tick(&read_all(&mut sources));
+        defmt::info!("{}", report);
+        if report.status == Status::Fresh {
+            fresh += 1;
+        }
+    }
+    report_memory();
+    hprintln!(
+        "estimator: {} fresh estimates in {} ticks",
+        fresh,
+        TICK_COUNT
+    );
+    fresh + 2 == TICK_COUNT
+}

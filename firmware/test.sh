@@ -1,0 +1,180 @@
+#!/usr/bin/env bash
+# Every firmware check, from any working directory:
+#   formatting, host tests of the library, clippy -D warnings (host tests and target build),
+#   the QEMU images (selftest, golden, e2e, estimator, bench, and the fault and panic images that
+#   must exit with failure rather than hang), the board image (build only: it needs the real
+#   STM32F405's clock tree), and the estimator image's flash/RAM budget against the committed
+#   expected values in expected/.
+#
+# Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it installs
+# nothing and says what is missing. Environment:
+#   UPDATE_EXPECTED=1     rewrite expected/*.size and expected/bench.run from this run
+#   FIRMWARE_BUDGET=report  report an over-budget estimator image without failing
+#   QEMU_TIMEOUT_S=120    bound on each QEMU run
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")"
+
+TARGET=thumbv7em-none-eabihf
+RELEASE="target/$TARGET/release"
+OUT="target/test-out"
+FLASH_BUDGET_B=65536
+RAM_BUDGET_B=16384
+
+missing=()
+command -v cargo >/dev/null || missing+=("cargo (the Rust toolchain pinned by ../rust-toolchain.toml)")
+if command -v rustc >/dev/null && [[ ! -d "$(rustc --print sysroot)/lib/rustlib/$TARGET" ]]; then
+    missing+=("the Rust target $TARGET (rustup target add $TARGET)")
+fi
+cargo fmt --version >/dev/null 2>&1 || missing+=("rustfmt (rustup component add rustfmt)")
+cargo clippy --version >/dev/null 2>&1 || missing+=("clippy (rustup component add clippy)")
+command -v qemu-system-arm >/dev/null || missing+=("qemu-system-arm (apt-get install -y qemu-system-arm)")
+command -v readelf >/dev/null || missing+=("readelf (apt-get install -y binutils)")
+if ((${#missing[@]})); then
+    printf 'firmware/test.sh: missing: %s\n' "${missing[@]}" >&2
+    exit 1
+fi
+
+HOST="$(rustc -vV | sed -n 's/^host: //p')"
+mkdir -p "$OUT"
+passed=0
+failed=0
+failures=()
+summary=()
+
+# check NAME COMMAND...: runs a check, times it, tallies it; never stops the script.
+check() {
+    local name="$1"
+    shift
+    local start=$SECONDS
+    printf '\n== %s\n' "$name"
+    if "$@"; then
+        passed=$((passed + 1))
+        summary+=("pass  $(printf '%4d' $((SECONDS - start))) s  $name")
+    else
+        failed=$((failed + 1))
+        failures+=("$name")
+        summary+=("FAIL  $(printf '%4d' $((SECONDS - start))) s  $name")
+    fi
+}
+
+# run_image NAME EXPECTED_STATUS PATTERN: runs an image on QEMU; passes when it exits with
+# EXPECTED_STATUS and its output has a line matching PATTERN.
+run_image() {
+    local name="$1" want="$2" pattern="$3" status=0
+    ./qemu.sh "$RELEASE/$name" >"$OUT/$name.out" 2>&1 || status=$?
+    grep -v '^bench case=' "$OUT/$name.out" | tail -n 12
+    if [[ "$status" != "$want" ]]; then
+        echo "$name: exit status $status, expected $want (124: hung until the timeout)"
+        return 1
+    fi
+    if ! grep -Eq "$pattern" "$OUT/$name.out"; then
+        echo "$name: no line matching /$pattern/"
+        return 1
+    fi
+}
+
+# compare_expected FILE ACTUAL_FILE: the committed expected values must match this run exactly
+# (QEMU with -icount and a pinned toolchain are deterministic); UPDATE_EXPECTED=1 rewrites them.
+compare_expected() {
+    local expected="$1" actual="$2"
+    if [[ "${UPDATE_EXPECTED:-0}" == 1 ]]; then
+        cp "$actual" "$expected"
+        echo "rewrote $expected"
+        return 0
+    fi
+    if [[ ! -f "$expected" ]]; then
+        echo "$expected is missing: run with UPDATE_EXPECTED=1 and commit it"
+        return 1
+    fi
+    if ! diff -u "$expected" "$actual"; then
+        echo "$expected differs from this run (UPDATE_EXPECTED=1 rewrites it; review the change)"
+        return 1
+    fi
+}
+
+# elf_sizes ELF: "flash static_ram" in bytes from the program headers: flash is every loaded
+# segment's file size at a flash address, static RAM every segment's memory size in RAM.
+elf_sizes() {
+    local flash=0 ram=0 type off vaddr paddr filesz memsz rest
+    while read -r type off vaddr paddr filesz memsz rest; do
+        [[ "$type" == LOAD ]] || continue
+        if ((paddr >= 0x08000000 && paddr < 0x08100000)); then flash=$((flash + filesz)); fi
+        if ((vaddr >= 0x20000000 && vaddr < 0x20020000)); then ram=$((ram + memsz)); fi
+    done < <(readelf -lW "$1")
+    echo "$flash $ram"
+}
+
+budget() {
+    local elf="$RELEASE/estimator" line flash static_ram stack reported_flash reported_static
+    read -r flash static_ram < <(elf_sizes "$elf")
+    line="$(grep -E '^memory: ' "$OUT/estimator.out" || true)"
+    if [[ -z "$line" ]]; then
+        echo "the estimator image reported no memory line"
+        return 1
+    fi
+    # memory: flash F B, static RAM S B, stack high-water K B, RAM total T B
+    read -r reported_flash reported_static stack < <(sed -E \
+        's/^memory: flash ([0-9]+) B, static RAM ([0-9]+) B, stack high-water ([0-9]+) B.*/\1 \2 \3/' <<<"$line")
+    if [[ "$reported_flash" != "$flash" || "$reported_static" != "$static_ram" ]]; then
+        echo "readelf ($flash B flash, $static_ram B RAM) and the image's linker symbols" \
+            "($reported_flash, $reported_static) disagree"
+        return 1
+    fi
+    local ram=$((static_ram + stack))
+    {
+        echo "# estimator image, bytes (firmware/test.sh; budget $FLASH_BUDGET_B flash, $RAM_BUDGET_B RAM)"
+        echo "flash $flash"
+        echo "static_ram $static_ram"
+        echo "stack_high_water $stack"
+        echo "ram_total $ram"
+    } >"$OUT/estimator.size"
+    cat "$OUT/estimator.size"
+    echo "all images (flash B, static RAM B):"
+    local image
+    for image in selftest golden e2e estimator bench; do
+        [[ -f "$RELEASE/$image" ]] && printf '  %-10s %s\n' "$image" "$(elf_sizes "$RELEASE/$image")"
+    done
+    local ok=0
+    compare_expected expected/estimator.size "$OUT/estimator.size" || ok=1
+    if ((flash > FLASH_BUDGET_B || ram > RAM_BUDGET_B)); then
+        echo "OVER BUDGET: flash $flash of $FLASH_BUDGET_B B, RAM $ram of $RAM_BUDGET_B B" \
+            "(static $static_ram + stack $stack)"
+        [[ "${FIRMWARE_BUDGET:-enforce}" == report ]] || ok=1
+    fi
+    return "$ok"
+}
+
+bench_expected() {
+    grep '^bench ' "$OUT/bench.out" >"$OUT/bench.run"
+    cat "$OUT/bench.run"
+    compare_expected expected/bench.run "$OUT/bench.run"
+}
+
+check "cargo fmt --check" cargo fmt --check
+check "host tests (cargo test --lib --target $HOST)" cargo test --lib --target "$HOST"
+check "clippy: host lib and tests" cargo clippy --lib --tests --target "$HOST" -- -D warnings
+check "clippy: target lib and images (with the board image)" \
+    cargo clippy --release --features board --lib --bins -- -D warnings
+check "build the QEMU images (release, $TARGET)" cargo build --release --bins
+check "QEMU selftest: model-core self-checks in f32" run_image selftest 0 '^[0-9]+ passed, 0 failed$'
+check "QEMU golden: golden rows from cable lengths, tip within 0.1 mm" run_image golden 0 '^golden: [0-9]+ passed, 0 failed$'
+check "QEMU e2e: recorded encoder trajectory against the f64 reference" run_image e2e 0 '^e2e: [0-9]+ passed, 0 failed$'
+check "QEMU estimator: the production loop with defmt" run_image estimator 0 '^estimator: '
+check "QEMU bench: instruction counts" run_image bench 0 '^bench case=update_warm'
+check "bench instruction counts match expected/bench.run" bench_expected
+check "QEMU fault: HardFault reports and exits 1" run_image fault 1 '^hard fault: pc'
+check "QEMU panic: panic reports and exits 1" run_image panic 1 'panicked at'
+check "estimator image within budget, sizes match expected/estimator.size" budget
+# Last: the `board` feature brings stm32f4xx-hal, whose PAC turns on cortex-m-rt's device vectors
+# for every image built with it, so the QEMU images above are built without it.
+check "build the board image (build only: it needs the real STM32F405's clock tree)" \
+    cargo build --release --features board --bin board
+
+printf '\n== summary\n'
+printf '%s\n' "${summary[@]}"
+printf 'firmware: %d passed, %d failed\n' "$passed" "$failed"
+if ((failed)); then
+    printf 'failed: %s\n' "${failures[@]}" >&2
+    exit 1
+fi
