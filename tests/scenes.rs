@@ -57,4 +57,11 @@ fn bench_3d_scene_is_the_golden_bench() {
         .map(|r| TipLoad::force(Vector3::from(r.unwrap().force_n)))
         .collect();
     same_physics(&from_scene, &reference, &loads);
+    // The scene gives the holes as angles; the reference bench as literal directions.
+    let holes = |m: &Model<f64>| m.rod().cables.iter().map(|c| c.hole_m).collect::<Vec<_>>();
+    let (a, b) = (holes(&from_scene), holes(&reference));
+    assert_eq!(a.len(), 3);
+    for (a, b) in a.iter().zip(&b) {
+        assert!((a - b).norm() < 1e-17, "{a:?} vs {b:?}");
+    }
 }

@@ -15,7 +15,7 @@
 
 use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
 use model_core::reference::golden_bench;
-use model_core::{Model, ModelError, ShootingSettings, Start, Termination, TipLoad};
+use model_core::{ModelError, ShootingSettings, Start, Termination, TipLoad};
 use nalgebra::Vector3;
 
 use crate::config::loop_config;
@@ -69,7 +69,7 @@ pub fn run(
 ) -> Result<(), ModelError> {
     let settings = ShootingSettings::default();
     for steps in STEP_COUNTS {
-        let model = Model::<f32>::new(golden_bench(steps)?)?;
+        let model = crate::config::BenchModel::new(golden_bench(steps)?)?;
         let total_steps = model.plan().total_steps();
         let line = |case, cost, sweeps, converged, tip_error_m| BenchLine {
             case,

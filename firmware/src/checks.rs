@@ -6,9 +6,9 @@
 //! * [`run_golden`]: the golden 3D rows, from their cable lengths alone.
 
 use model_core::reference::golden_rows;
-use model_core::{Model, ModelError, Termination};
+use model_core::{ModelError, Termination};
 
-use crate::config::{MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
+use crate::config::{BenchModel, MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
 use crate::control::{EstimatorLoop, Status, TickRecord, read_all};
 use crate::encoder::replay::ReplayError;
 use crate::encoder::{SpoolEncoder, SpoolError};
@@ -139,7 +139,7 @@ fn errors(record: &TickRecord, reference: &Reference) -> (f64, f64) {
 /// # Errors
 /// [`SetupError`] when the loop or a spool refuses its configuration.
 pub fn run_trajectory(
-    model: &Model<f32>,
+    model: &BenchModel,
     clock: &dyn Fn() -> u64,
     mut report: impl FnMut(&TickCheck),
 ) -> Result<Summary, SetupError> {
@@ -238,7 +238,7 @@ pub struct RowCheck {
 /// # Errors
 /// [`SetupError`] when the estimator refuses a row or its settings, or a row does not parse.
 pub fn run_golden(
-    model: &Model<f32>,
+    model: &BenchModel,
     mut report: impl FnMut(&RowCheck),
 ) -> Result<Summary, SetupError> {
     let settings = loop_config().estimator;

@@ -7,9 +7,10 @@
 //! start that lost the answer does not find it by itself). Nothing here panics.
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
-use model_core::{Model, ModelError, Quaternion, ShapePoint, Termination};
+use model_core::{ModelError, Quaternion, ShapePoint, Termination};
 use nalgebra::{Matrix3, Vector3};
 
+use crate::config::{BenchModel, MODEL_NODES};
 use crate::encoder::CableLengthSource;
 use crate::validate::{CABLES, ReadingValidator, Rejection};
 
@@ -110,7 +111,7 @@ pub fn read_all<S: CableLengthSource>(
 /// The estimator loop over a model of the three-cable rod.
 #[derive(Debug)]
 pub struct EstimatorLoop<'m> {
-    model: &'m Model<f32>,
+    model: &'m BenchModel,
     config: LoopConfig,
     validator: ReadingValidator,
     estimator: Option<WarmEstimator<'m>>,
@@ -124,7 +125,7 @@ impl<'m> EstimatorLoop<'m> {
     ///
     /// # Errors
     /// [`ModelError`] for a model without three cables or a non-positive period, speed or margin.
-    pub fn new(model: &'m Model<f32>, config: LoopConfig) -> Result<Self, ModelError> {
+    pub fn new(model: &'m BenchModel, config: LoopConfig) -> Result<Self, ModelError> {
         if !(config.tick_period_s.is_finite() && config.tick_period_s > 0.0) {
             return Err(ModelError::NotPositive("tick period"));
         }
@@ -258,13 +259,13 @@ impl<'m> EstimatorLoop<'m> {
 }
 
 /// The warm-started estimator the loop keeps.
-type WarmEstimator<'m> = Estimator<'m, f32, Quaternion<f32>, 3>;
+type WarmEstimator<'m> = Estimator<'m, f32, Quaternion<f32>, 3, MODEL_NODES>;
 
 /// The first estimate: a cold inverse solve. Kept out of line so that its frame (a cold forward
 /// solve with load continuation) is not added to the warm path's on the stack.
 #[inline(never)]
 fn cold<'m>(
-    model: &'m Model<f32>,
+    model: &'m BenchModel,
     lengths_m: &[f32; CABLES],
     settings: EstimatorSettings<f32>,
 ) -> Result<(WarmEstimator<'m>, Estimate<f32, 3>), ModelError> {

@@ -97,10 +97,15 @@ impl<T: Scalar> SpoolCalibration<T> {
 
     /// The cable length at a multi-turn position, m. In f32 the count difference from the zero
     /// offset is exact below 2^24 counts (1024 turns of a 14-bit sensor).
+    /// Differences beyond the i32 range (2^31 counts: 500 m of cable at 0.24 um a count) saturate.
     pub fn length_m(&self, position_counts: i64) -> T {
-        // i64 -> f64 is exact below 2^53 counts, far beyond any spool.
-        let counts = position_counts.saturating_sub(self.zero_offset_counts) as f64;
-        self.length_at_zero_m + self.sign() * T::lit(counts) * self.metres_per_count()
+        let difference = position_counts.saturating_sub(self.zero_offset_counts);
+        let clamped =
+            i32::try_from(difference).unwrap_or(if difference < 0 { i32::MIN } else { i32::MAX });
+        // i32 -> f32 is one instruction on the MCU (i64 or f64 would link software routines); every
+        // i32 is a finite f32 and f64, so the conversion cannot fail.
+        let counts = T::from_i32(clamped).unwrap_or_else(T::zero);
+        self.length_at_zero_m + self.sign() * counts * self.metres_per_count()
     }
 
     /// The multi-turn position that reads closest to `length_m`, counts (for generating fixtures and

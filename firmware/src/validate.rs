@@ -5,8 +5,10 @@
 //! last accepted reading than the cable can travel in that time (a physical speed limit times the
 //! elapsed ticks, plus a margin for quantisation).
 
+use model_core::ModelError;
 use model_core::inverse::cable_length_bound_m;
-use model_core::{Model, ModelError};
+
+use crate::config::BenchModel;
 
 /// Cables on the bench, one per length source.
 pub const CABLES: usize = 3;
@@ -67,7 +69,7 @@ impl ReadingValidator {
     /// [`ModelError::Mismatch`] when the model does not have three cables;
     /// [`ModelError::NotPositive`] or [`ModelError::NonFinite`] for a bad step or margin.
     pub fn new(
-        model: &Model<f32>,
+        model: &BenchModel,
         max_step_per_tick_m: f32,
         margin_m: f32,
     ) -> Result<Self, ModelError> {
@@ -169,7 +171,7 @@ mod tests {
     use model_core::reference::golden_bench;
 
     fn validator() -> Result<ReadingValidator, ModelError> {
-        let model = Model::<f32>::new(golden_bench(10)?)?;
+        let model = BenchModel::new(golden_bench(10)?)?;
         ReadingValidator::new(&model, 5e-4, 1e-5)
     }
 
@@ -250,7 +252,7 @@ mod tests {
 
     #[test]
     fn bad_settings_and_models_are_refused() -> Result<(), ModelError> {
-        let model = Model::<f32>::new(golden_bench(10)?)?;
+        let model = BenchModel::new(golden_bench(10)?)?;
         assert_eq!(
             ReadingValidator::new(&model, 0.0, 1e-5),
             Err(ModelError::NotPositive("cable step per tick"))
@@ -259,7 +261,7 @@ mod tests {
             ReadingValidator::new(&model, 1e-3, f32::NAN),
             Err(ModelError::NonFinite("cable step margin"))
         );
-        let two_cables = Model::<f32>::new(model_core::reference::exp2_bench(
+        let two_cables = BenchModel::new(model_core::reference::exp2_bench(
             model_core::reference::Exp2Mass::Average,
             10,
             2,

@@ -521,11 +521,11 @@ impl Scene {
         }
         for (i, c) in self.cables.iter().enumerate() {
             let field = format!("cable[{i}]");
-            rod.push_cable(Cable {
-                angle_rad: finite(&format!("{field}.angle_deg"), c.angle_deg)?.to_radians(),
-                radius_m: finite(&format!("{field}.radius_m"), c.radius_m)?,
-                end_m: finite(&format!("{field}.end_m"), c.end_m.unwrap_or(length_m))?,
-            })
+            rod.push_cable(Cable::at_angle(
+                finite(&format!("{field}.angle_deg"), c.angle_deg)?.to_radians(),
+                finite(&format!("{field}.radius_m"), c.radius_m)?,
+                finite(&format!("{field}.end_m"), c.end_m.unwrap_or(length_m))?,
+            ))
             .map_err(|_| cap("cables"))?;
         }
         for (i, l) in self.loads.iter().enumerate() {

@@ -2,20 +2,17 @@
 //! sensitivities.
 //!
 //! The state is `(r, R, u)`; `n(s)` is known in closed form from the plan. Alongside it the sweep can
-//! carry `K` tangent directions `(dr, dtheta, du)`, `dR = R hat(dtheta)`, seeded by a change of the
-//! base strain `u(0)` and of the tip force. They are integrated with the same RK4 stages, so they are
-//! the derivative of the discrete sweep (to the order of the scheme), with no finite-difference
+//! carry up to [`MAX_TANGENTS`] tangent directions `(dr, dtheta, du)`, `dR = R hat(dtheta)`, seeded by
+//! a change of the base strain `u(0)` and of the tip force. Each RK4 step first advances the state and
+//! records its four stages; every tangent then takes the same RK4 step over those stages. That is the
+//! derivative of the discrete sweep (to the order of the scheme), with no finite-difference
 //! cancellation: the Jacobians of the shooting and inverse solves, and the Jacobi fields of the
-//! stability test, all come from here.
+//! stability test, all come from here. The tangent count is a run-time number, so there is one
+//! compiled sweep (the firmware's flash is small), and a plain sweep pays nothing for tangents.
 //!
 //! Linearised right-hand side, with `n_l = R^T n`:
 //! `dn_l = n_l x dtheta + R^T dn`, `dv = D^-1 dn_l`, `dr' = R (dtheta x v + dv)`,
 //! `dtheta' = du - u x dtheta`, `du' = -C^-1 (du x C u + u x C du + dv x n_l + v x dn_l)`.
-
-// Every index below runs over const-sized arrays of the same length (`0..K`, `MAX_CABLES`).
-#![allow(clippy::indexing_slicing)]
-
-use core::array;
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -27,6 +24,9 @@ use crate::rod::StrainModel;
 use crate::shape::{ShapePoint, ShapeSink};
 use crate::transitions::{strain_after, strain_tangent_after};
 use crate::{MAX_CABLES, Scalar};
+
+/// Most tangent directions a sweep carries: three base-strain and three tip-force directions.
+pub(crate) const MAX_TANGENTS: usize = 6;
 
 /// What a sweep needs besides the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,37 +41,35 @@ pub(crate) struct Inputs<T> {
     pub load_scale: T,
 }
 
-/// A tangent direction: a change of the base strain and of the tip force.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Seed<T> {
-    pub du0: Vector3<T>,
-    pub dforce_n: Vector3<T>,
+/// Which tangents a sweep carries: the first `count` of the three base-strain directions followed by
+/// the three tip-force directions (0: none; 3: the base strain, for shooting and the stability test;
+/// 6: both, for the inverse).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tangents {
+    pub count: usize,
+    pub track_stability: bool,
 }
 
-impl<T: Scalar> Seed<T> {
-    /// The six unit directions: `u0` components, then tip-force components.
-    pub fn all() -> [Self; 6] {
-        array::from_fn(|j| {
-            let unit = |i: usize| if i == j % 3 { T::one() } else { T::zero() };
-            let e = Vector3::new(unit(0), unit(1), unit(2));
-            if j < 3 {
-                Self {
-                    du0: e,
-                    dforce_n: Vector3::zeros(),
-                }
-            } else {
-                Self {
-                    du0: Vector3::zeros(),
-                    dforce_n: e,
-                }
-            }
-        })
-    }
+impl Tangents {
+    pub const NONE: Self = Self {
+        count: 0,
+        track_stability: false,
+    };
 
     /// The three base-strain directions.
-    pub fn base_strain() -> [Self; 3] {
-        let all = Self::all();
-        [all[0], all[1], all[2]]
+    pub fn base_strain(track_stability: bool) -> Self {
+        Self {
+            count: 3,
+            track_stability,
+        }
+    }
+
+    /// All six directions.
+    pub fn all(track_stability: bool) -> Self {
+        Self {
+            count: MAX_TANGENTS,
+            track_stability,
+        }
     }
 }
 
@@ -90,10 +88,25 @@ impl<T: Scalar> Tangent<T> {
             u: Vector3::zeros(),
         }
     }
+
+    #[inline]
+    fn axpy(&self, k: &Self, h: T) -> Self {
+        Self {
+            r: self.r + k.r * h,
+            th: self.th + k.th * h,
+            u: self.u + k.u * h,
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        crate::scalar::all_finite(&self.r)
+            && crate::scalar::all_finite(&self.th)
+            && crate::scalar::all_finite(&self.u)
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
-struct Point<T: Scalar, A, const K: usize> {
+struct Point<T: Scalar, A> {
     r: Vector3<T>,
     /// The low-order part of the position (compensated summation): the position is `r + r_lo`.
     /// `r` never feeds back into the right-hand side, so this costs a few additions per step and
@@ -101,14 +114,34 @@ struct Point<T: Scalar, A, const K: usize> {
     r_lo: Vector3<T>,
     att: A,
     u: Vector3<T>,
-    tan: [Tangent<T>; K],
 }
 
-struct Rates<T: Scalar, A: Attitude<T>, const K: usize> {
+struct Rates<T: Scalar, A: Attitude<T>> {
     r: Vector3<T>,
     att: A::Rate,
     u: Vector3<T>,
-    tan: [Tangent<T>; K],
+}
+
+/// What a tangent's right-hand side needs from the state at one RK4 stage.
+#[derive(Clone, Copy, Debug)]
+struct Stage<T> {
+    m: Matrix3<T>,
+    n_local: Vector3<T>,
+    v: Vector3<T>,
+    u: Vector3<T>,
+    cu: Vector3<T>,
+}
+
+impl<T: Scalar> Stage<T> {
+    fn zero() -> Self {
+        Self {
+            m: Matrix3::zeros(),
+            n_local: Vector3::zeros(),
+            v: Vector3::zeros(),
+            u: Vector3::zeros(),
+            cu: Vector3::zeros(),
+        }
+    }
 }
 
 /// The internal-force field on one interval: `n(s) = n_end + g_lambda (s1 - s)`.
@@ -120,104 +153,119 @@ struct Field<'a, T> {
     kirchhoff: bool,
 }
 
+/// The state's right-hand side; writes what the tangents need into `record` when asked.
 #[inline]
-fn rates<T: Scalar, A: Attitude<T>, const K: usize>(
+fn rates<T: Scalar, A: Attitude<T>>(
     f: &Field<'_, T>,
-    dn: &[Vector3<T>; K],
     s: T,
-    p: &Point<T, A, K>,
-) -> Rates<T, A, K> {
+    p: &Point<T, A>,
+    record: Option<&mut Stage<T>>,
+) -> Rates<T, A> {
     let m = p.att.matrix();
     let n = f.n_end + f.g_lambda * (f.s1 - s);
-    let nl = m.tr_mul(&n);
-    let v = f.comp.shear_strain(&nl, f.kirchhoff);
+    let n_local = m.tr_mul(&n);
+    let v = f.comp.shear_strain(&n_local, f.kirchhoff);
     let cu = f.comp.c.component_mul(&p.u);
-    // Plain loops, not `array::from_fn`: its closure does not inline here and cost a third of a sweep.
-    let mut tan = [Tangent::zero(); K];
-    for ((out, t), dnj) in tan.iter_mut().zip(&p.tan).zip(dn) {
-        let dnl = nl.cross(&t.th) + m.tr_mul(dnj);
-        let dv = if f.kirchhoff {
-            Vector3::zeros()
-        } else {
-            f.comp.d_inv.component_mul(&dnl)
-        };
-        let cdu = f.comp.c.component_mul(&t.u);
-        *out = Tangent {
-            r: m * (t.th.cross(&v) + dv),
-            th: t.u - p.u.cross(&t.th),
-            u: -f
-                .comp
-                .c_inv
-                .component_mul(&(t.u.cross(&cu) + p.u.cross(&cdu) + dv.cross(&nl) + v.cross(&dnl))),
-        };
-    }
-    Rates {
+    let rates = Rates {
         r: m * v,
         att: p.att.rate(&m, &p.u),
-        u: f.comp.strain_rate(&p.u, &cu, &v, &nl),
-        tan,
+        u: f.comp.strain_rate(&p.u, &cu, &v, &n_local),
+    };
+    if let Some(stage) = record {
+        *stage = Stage {
+            m,
+            n_local,
+            v,
+            u: p.u,
+            cu,
+        };
+    }
+    rates
+}
+
+/// A tangent's right-hand side at one stage; `dn` is its constant change of internal force.
+#[inline]
+fn tangent_rates<T: Scalar>(
+    f: &Field<'_, T>,
+    st: &Stage<T>,
+    dn: &Vector3<T>,
+    t: &Tangent<T>,
+) -> Tangent<T> {
+    let dnl = st.n_local.cross(&t.th) + st.m.tr_mul(dn);
+    let dv = if f.kirchhoff {
+        Vector3::zeros()
+    } else {
+        f.comp.d_inv.component_mul(&dnl)
+    };
+    let cdu = f.comp.c.component_mul(&t.u);
+    Tangent {
+        r: st.m * (t.th.cross(&st.v) + dv),
+        th: t.u - st.u.cross(&t.th),
+        u: -f.comp.c_inv.component_mul(
+            &(t.u.cross(&st.cu) + st.u.cross(&cdu) + dv.cross(&st.n_local) + st.v.cross(&dnl)),
+        ),
     }
 }
 
 #[inline]
-fn add_tangents<T: Scalar, const K: usize>(
-    a: &[Tangent<T>; K],
-    k: &[Tangent<T>; K],
-    h: T,
-) -> [Tangent<T>; K] {
-    let mut out = *a;
-    for (o, k) in out.iter_mut().zip(k) {
-        o.r += k.r * h;
-        o.th += k.th * h;
-        o.u += k.u * h;
-    }
-    out
-}
-
-#[inline]
-fn stage<T: Scalar, A: Attitude<T>, const K: usize>(
-    p: &Point<T, A, K>,
-    k: &Rates<T, A, K>,
-    h: T,
-) -> Point<T, A, K> {
+fn stage<T: Scalar, A: Attitude<T>>(p: &Point<T, A>, k: &Rates<T, A>, h: T) -> Point<T, A> {
     Point {
         r: p.r + k.r * h,
         r_lo: p.r_lo,
         att: A::stage(&p.att, &k.att, h),
         u: p.u + k.u * h,
-        tan: add_tangents(&p.tan, &k.tan, h),
     }
 }
 
-/// One classical RK4 step of length `h` from `s`.
+/// One classical RK4 step of length `h` from `s`; writes its four stages into `stages` when given
+/// (in place: a plain sweep neither stores nor copies them).
 #[inline]
-fn rk4_step<T: Scalar, A: Attitude<T>, const K: usize>(
+fn rk4_step<T: Scalar, A: Attitude<T>>(
     f: &Field<'_, T>,
-    dn: &[Vector3<T>; K],
     s: T,
     h: T,
-    p: &Point<T, A, K>,
-) -> Point<T, A, K> {
+    p: &Point<T, A>,
+    stages: Option<&mut [Stage<T>; 4]>,
+) -> Point<T, A> {
+    let [r1, r2, r3, r4] = match stages {
+        Some(stages) => stages.each_mut().map(Some),
+        None => [None, None, None, None],
+    };
     let half = h * T::lit(0.5);
-    let k1 = rates(f, dn, s, p);
-    let k2 = rates(f, dn, s + half, &stage(p, &k1, half));
-    let k3 = rates(f, dn, s + half, &stage(p, &k2, half));
-    let k4 = rates(f, dn, s + h, &stage(p, &k3, h));
+    let k1 = rates(f, s, p, r1);
+    let k2 = rates(f, s + half, &stage(p, &k1, half), r2);
+    let k3 = rates(f, s + half, &stage(p, &k2, half), r3);
+    let k4 = rates(f, s + h, &stage(p, &k3, h), r4);
     let (w1, w2) = (h / T::lit(6.0), h / T::lit(3.0));
-    let mut tan = p.tan;
-    for (j, t) in tan.iter_mut().enumerate() {
-        let (a, b, c, d) = (&k1.tan[j], &k2.tan[j], &k3.tan[j], &k4.tan[j]);
-        t.r += (a.r + d.r) * w1 + (b.r + c.r) * w2;
-        t.th += (a.th + d.th) * w1 + (b.th + c.th) * w2;
-        t.u += (a.u + d.u) * w1 + (b.u + c.u) * w2;
-    }
     let (r, lo) = compensated_add(&p.r, &((k1.r + k4.r) * w1 + (k2.r + k3.r) * w2));
     Point {
         r,
         r_lo: p.r_lo + lo,
         att: A::combine(&p.att, &[k1.att, k2.att, k3.att, k4.att], h),
         u: p.u + (k1.u + k4.u) * w1 + (k2.u + k3.u) * w2,
-        tan,
+    }
+}
+
+/// The same RK4 step for one tangent, over the stages of the state's step.
+#[inline]
+fn tangent_step<T: Scalar>(
+    f: &Field<'_, T>,
+    stages: &[Stage<T>; 4],
+    dn: &Vector3<T>,
+    h: T,
+    t: &Tangent<T>,
+) -> Tangent<T> {
+    let half = h * T::lit(0.5);
+    let [s1, s2, s3, s4] = stages;
+    let k1 = tangent_rates(f, s1, dn, t);
+    let k2 = tangent_rates(f, s2, dn, &t.axpy(&k1, half));
+    let k3 = tangent_rates(f, s3, dn, &t.axpy(&k2, half));
+    let k4 = tangent_rates(f, s4, dn, &t.axpy(&k3, h));
+    let (w1, w2) = (h / T::lit(6.0), h / T::lit(3.0));
+    Tangent {
+        r: t.r + (k1.r + k4.r) * w1 + (k2.r + k3.r) * w2,
+        th: t.th + (k1.th + k4.th) * w1 + (k2.th + k3.th) * w2,
+        u: t.u + (k1.u + k4.u) * w1 + (k2.u + k3.u) * w2,
     }
 }
 
@@ -225,8 +273,7 @@ fn rk4_step<T: Scalar, A: Attitude<T>, const K: usize>(
 #[inline]
 fn compensated_add<T: Scalar>(a: &Vector3<T>, b: &Vector3<T>) -> (Vector3<T>, Vector3<T>) {
     let sum = a + b;
-    let lo = Vector3::from_fn(|i, _| {
-        let (x, y, t) = (a[i], b[i], sum[i]);
+    let lo = a.zip_zip_map(b, &sum, |x, y, t| {
         if x.abs() >= y.abs() {
             (x - t) + y
         } else {
@@ -238,25 +285,25 @@ fn compensated_add<T: Scalar>(a: &Vector3<T>, b: &Vector3<T>) -> (Vector3<T>, Ve
 
 /// A cable's running length and its tangents.
 #[derive(Clone, Copy, Debug)]
-struct CableTrace<T, const K: usize> {
+struct CableTrace<T> {
     length_m: T,
     length_lo: T,
-    d_length: [T; K],
+    d_length: [T; MAX_TANGENTS],
     /// The previous hole: the backbone point (high and low parts) and the offset `R d`.
     prev: (Vector3<T>, Vector3<T>, Vector3<T>),
-    d_prev: [Vector3<T>; K],
+    d_prev: [Vector3<T>; MAX_TANGENTS],
     started: bool,
     done: bool,
 }
 
-impl<T: Scalar, const K: usize> CableTrace<T, K> {
+impl<T: Scalar> CableTrace<T> {
     fn new() -> Self {
         Self {
             length_m: T::zero(),
             length_lo: T::zero(),
-            d_length: [T::zero(); K],
+            d_length: [T::zero(); MAX_TANGENTS],
             prev: (Vector3::zeros(), Vector3::zeros(), Vector3::zeros()),
-            d_prev: [Vector3::zeros(); K],
+            d_prev: [Vector3::zeros(); MAX_TANGENTS],
             started: false,
             done: false,
         }
@@ -267,14 +314,14 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     /// 40 cm position is lost to cancellation, and the lengths are summed with compensation.
     fn add_hole(
         &mut self,
-        r: (&Vector3<T>, &Vector3<T>),
+        p: &Point<T, impl Copy>,
         m: &Matrix3<T>,
-        tan: &[Tangent<T>; K],
+        tan: &[Tangent<T>],
         offset: &Vector3<T>,
     ) {
         let arm = m * offset;
-        let hole = (*r.0, *r.1, arm);
-        let mut d_hole = [Vector3::zeros(); K];
+        let hole = (p.r, p.r_lo, arm);
+        let mut d_hole = [Vector3::zeros(); MAX_TANGENTS];
         for (d, t) in d_hole.iter_mut().zip(tan) {
             *d = t.r + m * t.th.cross(offset);
         }
@@ -289,8 +336,12 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
             };
             self.length_m = sum;
             if len > T::zero() {
-                for ((d_length, d_hole), d_prev) in
-                    self.d_length.iter_mut().zip(&d_hole).zip(&self.d_prev)
+                for ((d_length, d_hole), d_prev) in self
+                    .d_length
+                    .iter_mut()
+                    .zip(&d_hole)
+                    .zip(&self.d_prev)
+                    .take(tan.len())
                 {
                     *d_length += chord.dot(&(d_hole - d_prev)) / len;
                 }
@@ -302,19 +353,21 @@ impl<T: Scalar, const K: usize> CableTrace<T, K> {
     }
 }
 
-/// Everything one sweep produces.
+/// Everything one sweep produces. Tangent arrays hold [`Sweep::tangents`] valid entries.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Sweep<T, const K: usize> {
+pub(crate) struct Sweep<T> {
     pub tip_position_m: Vector3<T>,
     pub tip_rotation: Matrix3<T>,
     /// `C u(L) - R(L)^T tau_tip` (body frame), N m: zero when the tip moment condition holds.
     pub moment_residual_nm: Vector3<T>,
-    pub d_moment_residual: [Vector3<T>; K],
+    pub d_moment_residual: [Vector3<T>; MAX_TANGENTS],
     pub cable_m: [T; MAX_CABLES],
-    pub d_cable: [[T; K]; MAX_CABLES],
-    pub d_tip_position: [Vector3<T>; K],
+    pub d_cable: [[T; MAX_TANGENTS]; MAX_CABLES],
+    pub d_tip_position: [Vector3<T>; MAX_TANGENTS],
     /// Tip rotation perturbation, body frame.
-    pub d_tip_rotation: [Vector3<T>; K],
+    pub d_tip_rotation: [Vector3<T>; MAX_TANGENTS],
+    /// How many tangents the arrays hold.
+    pub tangents: usize,
     /// First arc length where `det H` stopped being positive (only when tracked).
     pub conjugate_point_m: Option<T>,
     /// Largest `|R^T R - I|` met at the nodes.
@@ -322,58 +375,79 @@ pub(crate) struct Sweep<T, const K: usize> {
     pub finite: bool,
 }
 
-impl<T: Scalar, const K: usize> Sweep<T, K> {
+impl<T: Scalar> Sweep<T> {
     fn non_finite() -> Self {
         Self {
             tip_position_m: Vector3::zeros(),
             tip_rotation: Matrix3::identity(),
             moment_residual_nm: Vector3::zeros(),
-            d_moment_residual: [Vector3::zeros(); K],
+            d_moment_residual: [Vector3::zeros(); MAX_TANGENTS],
             cable_m: [T::zero(); MAX_CABLES],
-            d_cable: [[T::zero(); K]; MAX_CABLES],
-            d_tip_position: [Vector3::zeros(); K],
-            d_tip_rotation: [Vector3::zeros(); K],
+            d_cable: [[T::zero(); MAX_TANGENTS]; MAX_CABLES],
+            d_tip_position: [Vector3::zeros(); MAX_TANGENTS],
+            d_tip_rotation: [Vector3::zeros(); MAX_TANGENTS],
+            tangents: 0,
             conjugate_point_m: None,
             frame_drift: T::zero(),
             finite: false,
         }
+    }
+
+    fn carried(&self, j: usize) -> Option<usize> {
+        (j < self.tangents).then_some(j)
+    }
+
+    /// Tangent `j`'s change of the tip-moment residual (zero when not carried).
+    pub fn d_moment(&self, j: usize) -> Vector3<T> {
+        self.carried(j)
+            .and_then(|j| self.d_moment_residual.get(j))
+            .copied()
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j`'s change of the tip rotation (zero when not carried).
+    pub fn d_rotation(&self, j: usize) -> Vector3<T> {
+        self.carried(j)
+            .and_then(|j| self.d_tip_rotation.get(j))
+            .copied()
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j`'s change of the tip position (zero when not carried).
+    pub fn d_position(&self, j: usize) -> Vector3<T> {
+        self.carried(j)
+            .and_then(|j| self.d_tip_position.get(j))
+            .copied()
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j`'s change of cable `c`'s length (zero when not carried).
+    pub fn d_cable_length(&self, c: usize, j: usize) -> T {
+        self.carried(j)
+            .and_then(|j| self.d_cable.get(c).and_then(|row| row.get(j)))
+            .copied()
+            .unwrap_or_else(T::zero)
     }
 }
 
 /// The Jacobi fields of the clamped-free rod under dead loads: `H(s) = d theta(s) / d u(0)`, the first
 /// three tangents (seeded by the base strain, with the internal force fixed). `H ~ s I` near the base,
 /// so `det H > 0` there; a sign change on `(0, L]` is a conjugate point (the equilibrium is unstable).
-struct StabilityTrack<T> {
-    conjugate_point_m: Option<T>,
-}
-
-impl<T: Scalar> StabilityTrack<T> {
-    fn observe<const K: usize>(&mut self, s: T, tan: &[Tangent<T>; K]) {
-        if K < 3 || self.conjugate_point_m.is_some() {
-            return;
-        }
-        let h = Matrix3::from_columns(&[tan[0].th, tan[1].th, tan[2].th]);
-        if h.determinant() <= T::zero() {
-            self.conjugate_point_m = Some(s);
-        }
+fn conjugate_point<T: Scalar>(tan: &[Tangent<T>]) -> bool {
+    match tan {
+        [a, b, c, ..] => Matrix3::from_columns(&[a.th, b.th, c.th]).determinant() <= T::zero(),
+        _ => false,
     }
 }
 
-fn is_finite_point<T: Scalar, A: Attitude<T>, const K: usize>(p: &Point<T, A, K>) -> bool {
+fn is_finite_point<T: Scalar, A: Attitude<T>>(p: &Point<T, A>, tan: &[Tangent<T>]) -> bool {
     crate::scalar::all_finite(&p.r)
         && crate::scalar::all_finite(&p.u)
         && crate::scalar::all_finite(&p.att.matrix())
-        && p.tan.iter().all(|t| {
-            crate::scalar::all_finite(&t.r)
-                && crate::scalar::all_finite(&t.th)
-                && crate::scalar::all_finite(&t.u)
-        })
+        && tan.iter().all(Tangent::is_finite)
 }
 
-fn shape_point<T: Scalar, A: Attitude<T>, const K: usize>(
-    s: T,
-    p: &Point<T, A, K>,
-) -> ShapePoint<T> {
+fn shape_point<T: Scalar, A: Attitude<T>>(s: T, p: &Point<T, A>) -> ShapePoint<T> {
     ShapePoint {
         s_m: s,
         position_m: p.r + p.r_lo,
@@ -382,60 +456,69 @@ fn shape_point<T: Scalar, A: Attitude<T>, const K: usize>(
     }
 }
 
-/// Integrates from base to tip. `track_stability` needs the first three seeds to be [`Seed::base_strain`].
-pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
-    model: &Model<T, A>,
+/// Integrates from base to tip with the tangents `which`. Tracking stability needs at least the three
+/// base-strain tangents.
+pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     inputs: &Inputs<T>,
-    seeds: &[Seed<T>; K],
-    track_stability: bool,
+    which: Tangents,
     mut shape: Option<&mut ShapeSink<'_, T>>,
-) -> Sweep<T, K> {
+) -> Sweep<T> {
     let rod = model.rod();
     let plan = model.plan();
     let alpha = inputs.load_scale;
     let kirchhoff = rod.strain_model == StrainModel::Kirchhoff;
-    let dn: [Vector3<T>; K] = array::from_fn(|j| seeds[j].dforce_n * alpha);
-    let mut p: Point<T, A, K> = Point {
+    let count = which.count.min(MAX_TANGENTS);
+    // Seeds: tangent j < 3 changes u(0) along axis j; j >= 3 changes the tip force along axis j - 3.
+    let unit = |j: usize| Vector3::from_fn(|i, _| if i == j % 3 { T::one() } else { T::zero() });
+    let mut dn = [Vector3::zeros(); MAX_TANGENTS];
+    let mut tan = [Tangent::zero(); MAX_TANGENTS];
+    for (j, (d, t)) in dn.iter_mut().zip(tan.iter_mut()).enumerate() {
+        if j < 3 {
+            t.u = unit(j);
+        } else {
+            *d = unit(j) * alpha;
+        }
+    }
+    let (dn, tan) = (
+        dn.get(..count).unwrap_or(&[]),
+        tan.get_mut(..count).unwrap_or(&mut []),
+    );
+    let mut p: Point<T, A> = Point {
         r: rod.base_position_m,
         r_lo: Vector3::zeros(),
         att: *model.base_attitude(),
         u: inputs.u0,
-        tan: array::from_fn(|j| Tangent {
-            r: Vector3::zeros(),
-            th: Vector3::zeros(),
-            u: seeds[j].du0,
-        }),
     };
-    let offsets: [Vector3<T>; MAX_CABLES] = array::from_fn(|c| {
-        rod.cables
-            .get(c)
-            .map_or(Vector3::zeros(), |cable| cable.offset_local_m())
-    });
-    let mut cables: [CableTrace<T, K>; MAX_CABLES] = array::from_fn(|_| CableTrace::new());
-    let mut stability = StabilityTrack {
-        conjugate_point_m: None,
-    };
+    let offsets = model.cable_offsets();
+    let mut cables = [CableTrace::new(); MAX_CABLES];
+    let mut conjugate_point_m = None;
     let mut frame_drift = T::zero();
     let mut proximal: Option<&Compliance<T>> = None;
+    let mut stages = [Stage::zero(); 4];
 
-    let visit =
-        |node: &Node<T>, p: &mut Point<T, A, K>, cables: &mut [CableTrace<T, K>; MAX_CABLES]| {
-            let m = p.att.matrix();
-            if node.guide != NO_GUIDE {
-                for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
-                    if !trace.done {
-                        trace.add_hole((&p.r, &p.r_lo), &m, &p.tan, &offsets[c]);
-                    }
-                }
+    let visit = |node: &Node<T>,
+                 p: &Point<T, A>,
+                 tan: &[Tangent<T>],
+                 cables: &mut [CableTrace<T>; MAX_CABLES]| {
+        let m = p.att.matrix();
+        for (c, (trace, offset)) in cables
+            .iter_mut()
+            .zip(offsets)
+            .enumerate()
+            .take(rod.cables.len())
+        {
+            let ends = node.cable_ends & (1u8 << c) != 0;
+            if !trace.done && node.guide != NO_GUIDE {
+                trace.add_hole(p, &m, tan, offset);
             }
-            for (c, trace) in cables.iter_mut().enumerate().take(rod.cables.len()) {
-                if node.cable_ends & (1u8 << c) != 0 && !trace.done {
-                    trace.add_hole((&p.r, &p.r_lo), &m, &p.tan, &offsets[c]);
-                    trace.done = true;
-                }
+            if !trace.done && ends {
+                trace.add_hole(p, &m, tan, offset);
+                trace.done = true;
             }
-            m
-        };
+        }
+        m
+    };
 
     for (k, interval) in plan.intervals.iter().enumerate() {
         let Some(comp) = model.compliance(interval.section) else {
@@ -447,13 +530,13 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
                 if jump {
                     let m = p.att.matrix();
                     let tau_local = m.tr_mul(&(node.moment_nm * alpha));
-                    for t in p.tan.iter_mut() {
+                    for t in tan.iter_mut() {
                         t.u = strain_tangent_after(prox, comp, &tau_local, &t.th, &t.u);
                     }
                     p.u = strain_after(prox, comp, &tau_local, &p.u);
                 }
             }
-            let m = visit(node, &mut p, &mut cables);
+            let m = visit(node, &p, tan, &mut cables);
             frame_drift = frame_drift.max(crate::kinematics::orthonormality_error(&m));
         }
         let field = Field {
@@ -474,28 +557,29 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
             };
             if let Some(sink) = shape.as_deref_mut() {
                 while let Some(q) = sink.next_query().filter(|q| *q < s_next) {
-                    let here = Point::<T, A, 0> {
-                        r: p.r,
-                        r_lo: p.r_lo,
-                        att: p.att,
-                        u: p.u,
-                        tan: [],
-                    };
                     let at_q = if q > s {
-                        rk4_step(&field, &[], s, q - s, &here)
+                        rk4_step(&field, s, q - s, &p, None)
                     } else {
-                        here
+                        p
                     };
                     sink.write(shape_point(q, &at_q));
                 }
             }
-            p = rk4_step(&field, &dn, s, s_next - s, &p);
-            if track_stability {
-                stability.observe(s_next, &p.tan);
+            let h = s_next - s;
+            if tan.is_empty() {
+                p = rk4_step(&field, s, h, &p, None);
+            } else {
+                p = rk4_step(&field, s, h, &p, Some(&mut stages));
+                for (t, d) in tan.iter_mut().zip(dn) {
+                    *t = tangent_step(&field, &stages, d, h, t);
+                }
+            }
+            if which.track_stability && conjugate_point_m.is_none() && conjugate_point(tan) {
+                conjugate_point_m = Some(s_next);
             }
             s = s_next;
         }
-        if !is_finite_point(&p) {
+        if !is_finite_point(&p, tan) {
             return Sweep::non_finite();
         }
         proximal = Some(comp);
@@ -504,7 +588,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
     // The tip node: last guide holes and terminations, remaining shape queries, the boundary condition.
     let length = model.length_m();
     let tip_moment_nm = plan.nodes.last().map_or(Vector3::zeros(), |n| {
-        visit(n, &mut p, &mut cables);
+        visit(n, &p, tan, &mut cables);
         n.moment_nm
     }) + inputs.tip_moment_nm;
     if let Some(sink) = shape {
@@ -522,25 +606,39 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const K: usize>(
         tip_position_m: p.r + p.r_lo,
         tip_rotation: m,
         moment_residual_nm: comp.c.component_mul(&p.u) - tau_local,
-        d_moment_residual: array::from_fn(|j| {
-            comp.c.component_mul(&p.tan[j].u) - tau_local.cross(&p.tan[j].th)
-        }),
+        d_moment_residual: [Vector3::zeros(); MAX_TANGENTS],
         cable_m: [T::zero(); MAX_CABLES],
-        d_cable: [[T::zero(); K]; MAX_CABLES],
-        d_tip_position: array::from_fn(|j| p.tan[j].r),
-        d_tip_rotation: array::from_fn(|j| p.tan[j].th),
-        conjugate_point_m: stability.conjugate_point_m,
+        d_cable: [[T::zero(); MAX_TANGENTS]; MAX_CABLES],
+        d_tip_position: [Vector3::zeros(); MAX_TANGENTS],
+        d_tip_rotation: [Vector3::zeros(); MAX_TANGENTS],
+        tangents: count,
+        conjugate_point_m,
         frame_drift,
         finite: true,
     };
-    for (c, trace) in cables.iter().enumerate() {
-        out.cable_m[c] = trace.length_m + trace.length_lo;
-        out.d_cable[c] = trace.d_length;
+    for (j, t) in tan.iter().enumerate() {
+        if let (Some(e), Some(r), Some(th)) = (
+            out.d_moment_residual.get_mut(j),
+            out.d_tip_position.get_mut(j),
+            out.d_tip_rotation.get_mut(j),
+        ) {
+            *e = comp.c.component_mul(&t.u) - tau_local.cross(&t.th);
+            *r = t.r;
+            *th = t.th;
+        }
     }
-    let finite = crate::scalar::all_finite(&out.moment_residual_nm)
+    for ((length, d_length), trace) in out
+        .cable_m
+        .iter_mut()
+        .zip(out.d_cable.iter_mut())
+        .zip(&cables)
+    {
+        *length = trace.length_m + trace.length_lo;
+        *d_length = trace.d_length;
+    }
+    out.finite = crate::scalar::all_finite(&out.moment_residual_nm)
         && out.cable_m.iter().all(|x| x.is_finite())
         && out.d_cable.iter().flatten().all(|x| x.is_finite())
         && out.d_moment_residual.iter().all(crate::scalar::all_finite);
-    out.finite = finite;
     out
 }

@@ -22,12 +22,13 @@
 //! Jacobian, takes quasi-Newton (Broyden) steps with plain sweeps, and refreshes the Jacobian only
 //! when a step fails or on a schedule.
 
-use nalgebra::{Matrix3, SMatrix, SVD, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::error::{ModelError, finite, finite_vec, positive};
-use crate::integrate::{Seed, Sweep, sweep};
+use crate::integrate::{Sweep, Tangents, sweep};
 use crate::kinematics::Attitude;
 use crate::model::Model;
+use crate::plan::MAX_NODES;
 use crate::report::{SolveReport, Termination};
 use crate::shooting::{ShootingSettings, Start, TipLoad, default_tolerance};
 use crate::stability::{Stability, classify};
@@ -41,6 +42,7 @@ pub type CableVector<T> = SVector<T, MAX_CABLES>;
 pub trait ParamCount<T: Scalar, const P: usize> {
     /// Singular values and right singular vectors (columns of `V`) of a `MAX_CABLES x P` matrix,
     /// `None` if the decomposition does not converge.
+    #[cfg(feature = "identifiability")]
     fn svd(m: SMatrix<T, MAX_CABLES, P>) -> Option<(SVector<T, P>, SMatrix<T, P, P>)>;
 }
 
@@ -51,8 +53,9 @@ pub struct Params;
 macro_rules! param_count {
     ($($p:literal),*) => {$(
         impl<T: Scalar> ParamCount<T, $p> for Params {
+            #[cfg(feature = "identifiability")]
             fn svd(m: SMatrix<T, MAX_CABLES, $p>) -> Option<(SVector<T, $p>, SMatrix<T, $p, $p>)> {
-                let svd = SVD::try_new(m, false, true, T::default_epsilon(), 200)?;
+                let svd = nalgebra::SVD::try_new(m, false, true, T::default_epsilon(), 200)?;
                 Some((svd.singular_values, svd.v_t?.transpose()))
             }
         }
@@ -213,8 +216,10 @@ pub enum Determination {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quality<T, const P: usize> {
     /// Singular values of the weighted sensitivity `G / s` (per unit parameter), decreasing.
+    #[cfg(feature = "identifiability")]
     pub singular_values: SVector<T, P>,
     /// Largest over smallest singular value (infinite when rank deficient).
+    #[cfg(feature = "identifiability")]
     pub condition_number: T,
     /// Standard deviation of each parameter (infinite when undetermined).
     pub param_std: SVector<T, P>,
@@ -223,6 +228,7 @@ pub struct Quality<T, const P: usize> {
     /// Standard deviation of the tip position components, m, global frame.
     pub tip_std_m: Vector3<T>,
     /// The parameter direction the data determine worst (unit vector).
+    #[cfg(feature = "identifiability")]
     pub weakest_direction: SVector<T, P>,
     /// Rms of `(model - measured) / s` over the cables.
     pub residual_rms_sigma: T,
@@ -249,6 +255,13 @@ pub struct Estimate<T, const P: usize> {
     pub report: SolveReport<T>,
     /// How well the data determine it.
     pub quality: Quality<T, P>,
+}
+
+/// What the cable data alone determine at the estimate.
+struct DataOnly<T, const P: usize> {
+    rank_deficient: bool,
+    /// The parameters' covariance from the data alone (none when rank deficient).
+    covariance: Option<SMatrix<T, P, P>>,
 }
 
 /// The linearisation of the residuals at one point.
@@ -287,7 +300,7 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
     }
 
     /// New residuals and tip pose from a plain sweep; the Jacobian blocks stay.
-    fn set_residual(&mut self, sw: &Sweep<T, 0>, rc: CableVector<T>) {
+    fn set_residual(&mut self, sw: &Sweep<T>, rc: CableVector<T>) {
         self.e = sw.moment_residual_nm;
         self.rc = rc;
         self.tip_position_m = sw.tip_position_m;
@@ -315,8 +328,8 @@ struct Point<T, const P: usize> {
 }
 
 #[derive(Clone, Copy)]
-struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize> {
-    model: &'a Model<T, A>,
+struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> {
+    model: &'a Model<T, A, NODES>,
     basis: LoadBasis<T, P>,
     measured: CableVector<T>,
     settings: InverseSettings<T>,
@@ -328,9 +341,11 @@ struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize> {
     max_moment_residual: T,
 }
 
-impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
+impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
+    Problem<'a, T, A, P, NODES>
+{
     fn new(
-        model: &'a Model<T, A>,
+        model: &'a Model<T, A, NODES>,
         basis: LoadBasis<T, P>,
         measured: CableVector<T>,
         settings: InverseSettings<T>,
@@ -347,7 +362,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
                     .rod()
                     .cables
                     .iter()
-                    .fold(T::zero(), |r, c| r.max(c.radius_m));
+                    .fold(T::zero(), |r, c| r.max(c.radius_m()));
                 (settings.length_std_m * T::lit(0.1) / radius).sqrt()
             },
         }
@@ -377,7 +392,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
             if !sw.finite {
                 return None;
             }
-            lin = self.linearize(&x, &sw);
+            lin = self.linearize(&sw);
         }
         (self.model.moment_residual(&lin.e) <= self.max_moment_residual).then_some((x, lin))
     }
@@ -399,29 +414,27 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
         start.zip_map(&self.prior_weight, |s, f| (s * relax).max(f))
     }
 
-    fn full_sweep(&self, x: &Point<T, P>) -> Sweep<T, 6> {
+    fn full_sweep(&self, x: &Point<T, P>) -> Sweep<T> {
         let load = self.basis.load(&x.p);
-        sweep::<T, A, 6>(
+        sweep(
             self.model,
             &self.model.inputs(&x.u0, &load, T::one()),
-            &Seed::all(),
-            self.settings.check_stability,
+            Tangents::all(self.settings.check_stability),
             None,
         )
     }
 
-    fn plain_sweep(&self, x: &Point<T, P>) -> Sweep<T, 0> {
+    fn plain_sweep(&self, x: &Point<T, P>) -> Sweep<T> {
         let load = self.basis.load(&x.p);
-        sweep::<T, A, 0>(
+        sweep(
             self.model,
             &self.model.inputs(&x.u0, &load, T::one()),
-            &[],
-            false,
+            Tangents::NONE,
             None,
         )
     }
 
-    fn cable_residual<const K: usize>(&self, sw: &Sweep<T, K>) -> CableVector<T> {
+    fn cable_residual(&self, sw: &Sweep<T>) -> CableVector<T> {
         CableVector::from_fn(|c, _| {
             match (c < self.cables, sw.cable_m.get(c), self.measured.get(c)) {
                 (true, Some(model), Some(measured)) => *model - *measured,
@@ -430,43 +443,22 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
         })
     }
 
-    fn linearize(&self, x: &Point<T, P>, sw: &Sweep<T, 6>) -> Linearization<T, P> {
-        let col = |j: usize| {
-            sw.d_moment_residual
-                .get(j)
-                .copied()
-                .unwrap_or_else(Vector3::zeros)
-        };
-        let j_eu = Matrix3::from_columns(&[col(0), col(1), col(2)]);
-        let j_ef = Matrix3::from_columns(&[col(3), col(4), col(5)]);
+    fn linearize(&self, sw: &Sweep<T>) -> Linearization<T, P> {
+        let j_eu = Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]);
+        let j_ef = Matrix3::from_columns(&[sw.d_moment(3), sw.d_moment(4), sw.d_moment(5)]);
         // e = C u - R^T tau: d e / d tau = -R^T.
         let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
         let cable = |c: usize, j: usize| {
             if c < self.cables {
-                sw.d_cable
-                    .get(c)
-                    .and_then(|row| row.get(j))
-                    .copied()
-                    .unwrap_or_else(T::zero)
+                sw.d_cable_length(c, j)
             } else {
                 T::zero()
             }
         };
         let j_cu = SMatrix::<T, MAX_CABLES, 3>::from_fn(&cable);
         let j_cf = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, j + 3));
-        let tip = |j: usize| {
-            sw.d_tip_position
-                .get(j)
-                .copied()
-                .unwrap_or_else(Vector3::zeros)
-        };
-        let theta = |j: usize| {
-            sw.d_tip_rotation
-                .get(j)
-                .copied()
-                .unwrap_or_else(Vector3::zeros)
-        };
-        let _ = x;
+        let tip = |j: usize| sw.d_position(j);
+        let theta = |j: usize| sw.d_rotation(j);
         Linearization {
             e: sw.moment_residual_nm,
             rc: self.cable_residual(sw),
@@ -586,8 +578,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
         finite.then_some((du, dp))
     }
 
-    /// The fit's quality: identifiability from the data alone (singular values of `G`), uncertainty
-    /// from data and prior together.
+    /// The fit's quality: identifiability from the data alone, uncertainty from data and prior
+    /// together.
     fn quality(&self, lin: &Linearization<T, P>, red: Option<&Reduced<T, P>>) -> Quality<T, P>
     where
         Params: ParamCount<T, P>,
@@ -600,11 +592,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
         };
         let infinite: T = T::max_value().unwrap_or_else(|| T::lit(1e300));
         let mut quality: Quality<T, P> = Quality {
+            #[cfg(feature = "identifiability")]
             singular_values: SVector::zeros(),
+            #[cfg(feature = "identifiability")]
             condition_number: infinite,
             param_std: SVector::repeat(infinite),
             force_std_n: Vector3::repeat(infinite),
             tip_std_m: Vector3::repeat(infinite),
+            #[cfg(feature = "identifiability")]
             weakest_direction: SVector::zeros(),
             residual_rms_sigma,
             determination: Determination::Undetermined,
@@ -612,37 +607,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
         let Some(red) = red else {
             return quality;
         };
-        // The SVD of G itself, not of G^T G: the normal matrix squares the condition number, which
-        // f32 cannot hold for the axial direction.
-        let Some((singular, v)) = Params::svd(red.g) else {
+        let Some(data) = self.data_only(red, &mut quality) else {
             return quality;
         };
-        let (mut largest, mut smallest, mut weakest) = (T::zero(), infinite, 0usize);
-        for (i, &value) in singular.iter().enumerate() {
-            largest = largest.max(value);
-            if value < smallest {
-                (smallest, weakest) = (value, i);
-            }
-        }
-        let mut sorted = singular;
-        sorted
-            .as_mut_slice()
-            .sort_unstable_by(|a, b| b.partial_cmp(a).unwrap_or(core::cmp::Ordering::Equal));
-        quality.singular_values = sorted;
-        quality.weakest_direction = v.column(weakest).into_owned();
-        let rank_deficient =
-            smallest <= largest * T::default_epsilon() * T::lit(100.0) || largest == T::zero();
-        if !rank_deficient {
-            quality.condition_number = largest / smallest;
-        }
-        // Covariance of p: the inverse information, V diag(1 / sigma^2) V^T from the data alone when
-        // there is no prior.
+        // Covariance of p: the inverse information, from the data alone when there is no prior.
         let covariance = if self.prior_weight.iter().all(|w| *w == T::zero()) {
-            if rank_deficient {
-                return quality;
+            match data.covariance {
+                Some(c) if !data.rank_deficient => c,
+                _ => return quality,
             }
-            v * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
-                * v.transpose()
         } else {
             match self.information(red).cholesky() {
                 Some(c) => c.inverse(),
@@ -661,7 +634,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
             .force_std_n
             .max()
             .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
-        quality.determination = if rank_deficient {
+        quality.determination = if data.rank_deficient {
             Determination::Undetermined
         } else if residual_rms_sigma > T::lit(3.0) {
             Determination::Inconsistent
@@ -671,6 +644,58 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
             Determination::Determined
         };
         quality
+    }
+
+    /// What the data alone say, from the singular values of `G` (not of `G^T G`: the normal matrix
+    /// squares the condition number, which f32 cannot hold for the axial direction). Fills the
+    /// singular values, condition number and weakest direction; `None` if the SVD does not converge.
+    #[cfg(feature = "identifiability")]
+    fn data_only(&self, red: &Reduced<T, P>, quality: &mut Quality<T, P>) -> Option<DataOnly<T, P>>
+    where
+        Params: ParamCount<T, P>,
+    {
+        let (singular, v) = Params::svd(red.g)?;
+        let (mut largest, mut smallest, mut weakest) =
+            (T::zero(), quality.condition_number, 0usize);
+        for (i, &value) in singular.iter().enumerate() {
+            largest = largest.max(value);
+            if value < smallest {
+                (smallest, weakest) = (value, i);
+            }
+        }
+        let mut sorted = singular;
+        crate::scalar::insertion_sort(sorted.as_mut_slice(), |a, b| a > b);
+        quality.singular_values = sorted;
+        quality.weakest_direction = v.column(weakest).into_owned();
+        let rank_deficient =
+            smallest <= largest * T::default_epsilon() * T::lit(100.0) || largest == T::zero();
+        if !rank_deficient {
+            quality.condition_number = largest / smallest;
+        }
+        // V diag(1 / sigma^2) V^T.
+        let covariance = (!rank_deficient).then(|| {
+            v * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
+                * v.transpose()
+        });
+        Some(DataOnly {
+            rank_deficient,
+            covariance,
+        })
+    }
+
+    /// What the data alone say, without the SVD (the controller's flash): rank deficient when there
+    /// are fewer cables than parameters or `G^T G` is not positive definite. A direction the data
+    /// determine only numerically badly then shows as [`Determination::Weak`] through its standard
+    /// deviation rather than as [`Determination::Undetermined`].
+    #[cfg(not(feature = "identifiability"))]
+    fn data_only(&self, red: &Reduced<T, P>, _: &mut Quality<T, P>) -> Option<DataOnly<T, P>> {
+        let covariance = (self.cables >= P)
+            .then(|| red.g.tr_mul(&red.g).cholesky().map(|c| c.inverse()))
+            .flatten();
+        Some(DataOnly {
+            rank_deficient: covariance.is_none(),
+            covariance,
+        })
     }
 
     /// The smallest fit change, in standard deviations, the scalar type can resolve: cable lengths are
@@ -731,8 +756,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Problem<'a, T, A, P> {
 }
 
 /// `1 / prior std` for each parameter of `basis` (zero when the prior scale is infinite).
-fn prior_weight<T: Scalar, A: Attitude<T>, const P: usize>(
-    model: &Model<T, A>,
+fn prior_weight<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     basis: &LoadBasis<T, P>,
     settings: &InverseSettings<T>,
 ) -> SVector<T, P> {
@@ -740,8 +765,8 @@ fn prior_weight<T: Scalar, A: Attitude<T>, const P: usize>(
 }
 
 /// `1 / prior std` for each parameter for a prior of `std_scale` buckling scales.
-fn prior_weight_for<T: Scalar, A: Attitude<T>, const P: usize>(
-    model: &Model<T, A>,
+fn prior_weight_for<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     basis: &LoadBasis<T, P>,
     std_scale: T,
 ) -> SVector<T, P> {
@@ -774,8 +799,8 @@ pub enum InverseStart<T, const P: usize> {
     },
 }
 
-fn validate_measurements<T: Scalar, A: Attitude<T>>(
-    model: &Model<T, A>,
+fn validate_measurements<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     measured_m: &[T],
 ) -> Result<CableVector<T>, ModelError> {
     let rod = model.rod();
@@ -813,7 +838,7 @@ pub fn cable_length_bound_m<T: Scalar>(rod: &crate::Rod<T>, cable: &crate::Cable
         .chain(core::iter::once(cable.end_m));
     for s in holes {
         if let Some(prev) = previous {
-            bound += (s - prev) * T::lit(1.1) + cable.radius_m * T::lit(2.0);
+            bound += (s - prev) * T::lit(1.1) + cable.radius_m() * T::lit(2.0);
         }
         previous = Some(s);
     }
@@ -824,8 +849,8 @@ pub fn cable_length_bound_m<T: Scalar>(rod: &crate::Rod<T>, cable: &crate::Cable
 ///
 /// Fails only on invalid input. The answer is usable when `report.termination.is_success()`; how
 /// well the data determine it is in `quality`.
-pub fn estimate<T: Scalar, A: Attitude<T>, const P: usize>(
-    model: &Model<T, A>,
+pub fn estimate<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     basis: &LoadBasis<T, P>,
     measured_m: &[T],
     start: InverseStart<T, P>,
@@ -852,31 +877,15 @@ where
             let eq = model.solve(&basis.load(&p), Start::Cold, &shooting)?;
             work.iterations = eq.report.iterations;
             work.sweeps = eq.report.sweeps;
-            if !eq.report.termination.is_success() {
-                let lin = problem.linearize(
-                    &Point {
-                        u0: eq.base_strain_per_m,
-                        p,
-                    },
-                    &problem.full_sweep(&Point {
-                        u0: eq.base_strain_per_m,
-                        p,
-                    }),
-                );
-                return Ok(problem.finish(
-                    Point {
-                        u0: eq.base_strain_per_m,
-                        p,
-                    },
-                    &lin,
-                    eq.report.termination,
-                    work,
-                ));
-            }
-            Point {
+            let x = Point {
                 u0: eq.base_strain_per_m,
                 p,
+            };
+            if !eq.report.termination.is_success() {
+                let lin = problem.linearize(&problem.full_sweep(&x));
+                return Ok(problem.finish(x, &lin, eq.report.termination, work));
             }
+            x
         }
         InverseStart::Warm {
             params,
@@ -895,7 +904,7 @@ where
     Ok(problem.solve(x, work))
 }
 
-impl<T: Scalar, A: Attitude<T>, const P: usize> Problem<'_, T, A, P>
+impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, T, A, P, NODES>
 where
     Params: ParamCount<T, P>,
 {
@@ -903,10 +912,10 @@ where
         work.sweeps = work.sweeps.saturating_add(1);
         let sw = self.full_sweep(&x);
         if !sw.finite {
-            let lin = self.linearize(&x, &sw);
+            let lin = self.linearize(&sw);
             return self.finish(x, &lin, Termination::NonFinite, work);
         }
-        let mut lin = self.linearize(&x, &sw);
+        let mut lin = self.linearize(&sw);
         // A graduated prior: the first steps hold the load to a tenth of the buckling scale, then the
         // prior relaxes by half each accepted step to its final value. From a cold start the linear
         // model can trade a large axial force for bending (at the sagging shape an axial force and a
@@ -947,7 +956,7 @@ where
             work.sweeps = work.sweeps.saturating_add(1);
             let sw = self.full_sweep(&trial);
             let projected = if sw.finite {
-                self.project(trial, self.linearize(&trial, &sw), &mut work)
+                self.project(trial, self.linearize(&sw), &mut work)
             } else {
                 None
             };
@@ -1101,8 +1110,9 @@ impl<T: Scalar> EstimatorSettings<T> {
 /// report says [`Termination::IterationLimit`] and the next update carries on from there.
 /// Steps are limited by the trust region, so the estimate follows its branch continuously.
 #[derive(Clone, Debug)]
-pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize> {
-    model: &'a Model<T, A>,
+pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize = MAX_NODES>
+{
+    model: &'a Model<T, A, NODES>,
     basis: LoadBasis<T, P>,
     settings: EstimatorSettings<T>,
     x: Point<T, P>,
@@ -1110,13 +1120,14 @@ pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize> {
     stability: Stability<T>,
 }
 
-impl<'a, T: Scalar, A: Attitude<T>, const P: usize> Estimator<'a, T, A, P>
+impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
+    Estimator<'a, T, A, P, NODES>
 where
     Params: ParamCount<T, P>,
 {
     /// Starts from a cold estimate for the first measurements; returns the estimator and that estimate.
     pub fn new(
-        model: &'a Model<T, A>,
+        model: &'a Model<T, A, NODES>,
         basis: LoadBasis<T, P>,
         measured_m: &[T],
         start_params: SVector<T, P>,
@@ -1146,7 +1157,7 @@ where
         let problem = estimator.problem(validate_measurements(model, measured_m)?);
         let sw = problem.full_sweep(&estimator.x);
         if sw.finite {
-            estimator.lin = problem.linearize(&estimator.x, &sw);
+            estimator.lin = problem.linearize(&sw);
         }
         Ok((estimator, first))
     }
@@ -1156,7 +1167,7 @@ where
         self.x.p
     }
 
-    fn problem(&self, measured: CableVector<T>) -> Problem<'a, T, A, P> {
+    fn problem(&self, measured: CableVector<T>) -> Problem<'a, T, A, P, NODES> {
         Problem::new(self.model, self.basis, measured, self.settings.inverse)
     }
 
@@ -1206,7 +1217,7 @@ where
             };
             let sw = problem.full_sweep(&trial);
             if sw.finite {
-                let lin = problem.linearize(&trial, &sw);
+                let lin = problem.linearize(&sw);
                 let trial_merit = problem.merit(&trial.p, &lin);
                 if trial_merit < merit && problem.acceptable(&trial.p, &lin) {
                     (self.x, self.lin, merit, exact) = (trial, lin, trial_merit, true);
@@ -1223,7 +1234,7 @@ where
             if !sw.finite {
                 return Ok(self.finish(&problem, Termination::NonFinite, work));
             }
-            self.lin = problem.linearize(&self.x, &sw);
+            self.lin = problem.linearize(&sw);
             self.stability = self.verdict(&problem);
             exact = true;
         }
@@ -1232,7 +1243,7 @@ where
     /// The hard real-time update: one exact linearisation at the last estimate, one Newton step.
     fn one_step(
         &mut self,
-        problem: &Problem<'_, T, A, P>,
+        problem: &Problem<'_, T, A, P, NODES>,
         mut work: crate::shooting::Work,
     ) -> Estimate<T, P> {
         work.sweeps = 1;
@@ -1240,7 +1251,7 @@ where
         if !sw.finite {
             return problem.finish(self.x, &self.lin, Termination::NonFinite, work);
         }
-        self.lin = problem.linearize(&self.x, &sw);
+        self.lin = problem.linearize(&sw);
         self.stability = self.verdict(problem);
         let Some(red) = problem.reduce(&self.lin) else {
             return self.finish(problem, Termination::Singular, work);
@@ -1266,7 +1277,7 @@ where
         out
     }
 
-    fn verdict(&self, problem: &Problem<'_, T, A, P>) -> Stability<T> {
+    fn verdict(&self, problem: &Problem<'_, T, A, P, NODES>) -> Stability<T> {
         if problem.settings.check_stability {
             problem.stability(&self.x.p, &self.lin)
         } else {
@@ -1276,7 +1287,7 @@ where
 
     fn finish(
         &self,
-        problem: &Problem<'_, T, A, P>,
+        problem: &Problem<'_, T, A, P, NODES>,
         termination: Termination,
         work: crate::shooting::Work,
     ) -> Estimate<T, P> {

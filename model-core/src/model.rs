@@ -7,8 +7,9 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::constitutive::Compliance;
 use crate::error::{ModelError, finite_vec};
-use crate::integrate::{Inputs, sweep};
+use crate::integrate::{Inputs, Tangents, sweep};
 use crate::kinematics::{Attitude, Quaternion};
+use crate::plan::MAX_NODES;
 use crate::plan::Plan;
 use crate::rod::Rod;
 use crate::shape::{ShapePoint, ShapeSink};
@@ -17,10 +18,12 @@ use crate::{MAX_CABLES, MAX_SECTIONS, Scalar};
 
 /// A scene ready to solve. `A` chooses how the frame is integrated (see [`crate::kinematics`]).
 #[derive(Clone, Debug)]
-pub struct Model<T: Scalar, A: Attitude<T> = Quaternion<T>> {
+pub struct Model<T: Scalar, A: Attitude<T> = Quaternion<T>, const NODES: usize = MAX_NODES> {
     rod: Rod<T>,
-    plan: Plan<T>,
+    plan: Plan<T, NODES>,
     compliances: Vec<Compliance<T>, MAX_SECTIONS>,
+    /// Each cable's hole offset in the local frame, m (zero beyond the rod's cables).
+    cable_offsets: [Vector3<T>; MAX_CABLES],
     base: A,
     length_m: T,
     moment_scale_nm: T,
@@ -42,7 +45,7 @@ pub struct Evaluation<T> {
     pub frame_drift: T,
 }
 
-impl<T: Scalar, A: Attitude<T>> Model<T, A> {
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     /// Validates the rod and builds its plan.
     pub fn new(rod: Rod<T>) -> Result<Self, ModelError> {
         rod.validate()?;
@@ -56,7 +59,12 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
             min_bending = min_bending.min(section.stiffness.min_bending_nm2());
         }
         let length_m = rod.length_m();
+        let mut cable_offsets = [Vector3::zeros(); MAX_CABLES];
+        for (offset, cable) in cable_offsets.iter_mut().zip(&rod.cables) {
+            *offset = cable.offset_local_m();
+        }
         Ok(Self {
+            cable_offsets,
             base: A::from_matrix(&rod.base_orientation),
             rod,
             plan,
@@ -73,7 +81,7 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
     }
 
     /// The integration grid.
-    pub fn plan(&self) -> &Plan<T> {
+    pub fn plan(&self) -> &Plan<T, NODES> {
         &self.plan
     }
 
@@ -95,6 +103,10 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
                 .loads
                 .iter()
                 .all(|l| l.moment_nm == Vector3::zeros())
+    }
+
+    pub(crate) fn cable_offsets(&self) -> &[Vector3<T>; MAX_CABLES] {
+        &self.cable_offsets
     }
 
     pub(crate) fn base_attitude(&self) -> &A {
@@ -130,11 +142,10 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
     ) -> Result<Evaluation<T>, ModelError> {
         finite_vec(base_strain_per_m, "base strain")?;
         load.validate()?;
-        let out = sweep::<T, A, 0>(
+        let out = sweep(
             self,
             &self.inputs(base_strain_per_m, load, T::one()),
-            &[],
-            false,
+            Tangents::NONE,
             None,
         );
         if !out.finite {
@@ -189,11 +200,10 @@ impl<T: Scalar, A: Attitude<T>> Model<T, A> {
             out,
             written: 0,
         };
-        let sw = sweep::<T, A, 0>(
+        let sw = sweep(
             self,
             &self.inputs(base_strain_per_m, load, T::one()),
-            &[],
-            false,
+            Tangents::NONE,
             Some(&mut sink),
         );
         if !sw.finite {

@@ -14,7 +14,10 @@ use crate::mass::{guide_is_segment, line_density_kg_per_m};
 use crate::rod::Rod;
 use crate::{MAX_CABLES, MAX_GUIDES, MAX_POINT_LOADS, MAX_SECTIONS, Scalar};
 
-/// Most nodes a plan can hold: base, tip, section ends, three per guide, one per load and cable end.
+/// Most nodes a plan can hold by default: base, tip, section ends, three per guide, one per load and
+/// cable end. It is the default of [`crate::Model`]'s `NODES` parameter; a controller that knows its
+/// scene picks a smaller capacity there (the plan is most of a model's memory), and
+/// [`crate::Model::new`] refuses a scene that needs more with [`ModelError::Capacity`].
 pub const MAX_NODES: usize = 2 + MAX_SECTIONS + 3 * MAX_GUIDES + MAX_POINT_LOADS + MAX_CABLES;
 
 /// No guide at this node.
@@ -46,14 +49,14 @@ pub(crate) struct Interval<T> {
 
 /// The grid of one scene.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Plan<T> {
+pub struct Plan<T, const NODES: usize = MAX_NODES> {
     gravity_m_s2: Vector3<T>,
-    pub(crate) nodes: Vec<Node<T>, MAX_NODES>,
-    pub(crate) intervals: Vec<Interval<T>, MAX_NODES>,
+    pub(crate) nodes: Vec<Node<T>, NODES>,
+    pub(crate) intervals: Vec<Interval<T>, NODES>,
     total_steps: u32,
 }
 
-impl<T: Scalar> Plan<T> {
+impl<T: Scalar, const NODES: usize> Plan<T, NODES> {
     /// Builds the grid. The rod must already be validated.
     pub(crate) fn new(rod: &Rod<T>) -> Result<Self, ModelError> {
         let length = rod.length_m();
@@ -88,10 +91,10 @@ impl<T: Scalar> Plan<T> {
         for cable in &rod.cables {
             push(cable.end_m)?;
         }
-        points.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+        crate::scalar::insertion_sort(&mut points, |a, b| a < b);
 
         // 2. Nodes, merging points closer than `tol`; the first and last are pinned to 0 and L.
-        let mut nodes: Vec<Node<T>, MAX_NODES> = Vec::new();
+        let mut nodes: Vec<Node<T>, NODES> = Vec::new();
         for &s in &points {
             let s = s.max(T::zero()).min(length);
             let merged = nodes.last().is_some_and(|n| (s - n.s_m).abs() <= tol);
@@ -112,9 +115,8 @@ impl<T: Scalar> Plan<T> {
         {
             last.s_m = length;
         }
-        let at = |nodes: &Vec<Node<T>, MAX_NODES>, s: T| {
-            nodes.iter().position(|n| (n.s_m - s).abs() <= tol)
-        };
+        let at =
+            |nodes: &Vec<Node<T>, NODES>, s: T| nodes.iter().position(|n| (n.s_m - s).abs() <= tol);
         for (g, guide) in rod.guides.iter().enumerate() {
             if let Some(i) = at(&nodes, guide.s_m)
                 && let Some(node) = nodes.get_mut(i)
@@ -139,7 +141,7 @@ impl<T: Scalar> Plan<T> {
         }
 
         // 3. Intervals: section, density and steps.
-        let mut intervals: Vec<Interval<T>, MAX_NODES> = Vec::new();
+        let mut intervals: Vec<Interval<T>, NODES> = Vec::new();
         let mut total_steps: u32 = 0;
         for pair in nodes.windows(2) {
             let [a, b] = pair else { continue };

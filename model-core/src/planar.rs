@@ -19,6 +19,7 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::model::Model;
+use crate::plan::MAX_NODES;
 use crate::plan::{NO_GUIDE, Node};
 use crate::report::{SolveReport, Termination};
 use crate::rod::StrainModel;
@@ -41,8 +42,8 @@ pub struct Plane<T> {
 /// The plane a rod and a tip load stay in, if they do: every force (gravity, point loads, tip)
 /// perpendicular to one normal that is perpendicular to the base tangent, every moment along it, and
 /// the section's bending stiffness about that normal a principal one. `None` otherwise.
-pub fn plane_of<T: Scalar, A: Attitude<T>>(
-    model: &Model<T, A>,
+pub fn plane_of<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     load: &TipLoad<T>,
 ) -> Option<Plane<T>> {
     let rod = model.rod();
@@ -193,16 +194,16 @@ struct Sweep<T> {
 
 /// A planar view of a model.
 #[derive(Clone, Debug)]
-pub struct PlanarModel<'a, T: Scalar, A: Attitude<T>> {
-    model: &'a Model<T, A>,
+pub struct PlanarModel<'a, T: Scalar, A: Attitude<T>, const NODES: usize = MAX_NODES> {
+    model: &'a Model<T, A, NODES>,
     plane: Plane<T>,
     /// Per section: bending stiffness about the normal, `1 / G A`, `1 / E A`.
     sections: heapless::Vec<(T, T, T), { crate::MAX_SECTIONS }>,
 }
 
-impl<'a, T: Scalar, A: Attitude<T>> PlanarModel<'a, T, A> {
+impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NODES> {
     /// The planar reduction of `model` under `load`, if the scene stays in a plane ([`plane_of`]).
-    pub fn new(model: &'a Model<T, A>, load: &TipLoad<T>) -> Option<Self> {
+    pub fn new(model: &'a Model<T, A, NODES>, load: &TipLoad<T>) -> Option<Self> {
         let plane = plane_of(model, load)?;
         let axis = model.rod().base_orientation.tr_mul(&plane.normal);
         let mut sections = heapless::Vec::new();

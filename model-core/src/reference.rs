@@ -3,7 +3,7 @@
 //!
 //! The thesis states its bench in cm and grams; the conversion happens here, once.
 
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 
 use crate::error::ModelError;
 use crate::{
@@ -40,6 +40,13 @@ pub const GUIDE_MASS_KG: f64 = 2.2e-3;
 pub const AVERAGE_LINE_DENSITY_KG_M: f64 = 0.0149 / 0.40;
 /// Cable offset from the backbone, m.
 pub const CABLE_RADIUS_M: f64 = 0.01;
+/// The three holes' directions `(cos a, sin a)` at a = 0, 120 and 240 degrees, as literals: building
+/// the bench then takes no trigonometry (the firmware links no sine).
+pub const CABLE_DIRECTIONS: [(f64, f64); 3] = [
+    (1.0, 0.0),
+    (-0.5, 0.866_025_403_784_438_6),
+    (-0.5, -0.866_025_403_784_438_6),
+];
 /// Standard gravity used by the thesis and the golden file, m/s^2.
 pub const GRAVITY_M_S2: f64 = 9.81;
 
@@ -87,8 +94,8 @@ pub fn exp1_bench<T: Scalar>(
     Ok(rod)
 }
 
-/// The thesis's experiment-2 bench: one 39 cm section with five guides and `cables` cables at 120
-/// degrees (cable 0 on the upper side, +y at the base, as measured on the bench), each terminated at
+/// The thesis's experiment-2 bench: one 39 cm section with five guides and `cables` (at most three)
+/// cables at 120 degrees (cable 0 on the upper side, +y at the base, as measured on the bench), each terminated at
 /// the tip.
 pub fn exp2_bench<T: Scalar>(
     mass: Exp2Mass,
@@ -115,10 +122,9 @@ pub fn exp2_bench<T: Scalar>(
             mass_kg: T::lit(guide_mass),
         })?;
     }
-    for j in 0..cables {
+    for (x, y) in CABLE_DIRECTIONS.iter().take(cables) {
         rod.push_cable(Cable {
-            angle_rad: T::lit(j as f64 * 2.0 * core::f64::consts::PI / 3.0),
-            radius_m: T::lit(CABLE_RADIUS_M),
+            hole_m: Vector2::new(T::lit(x * CABLE_RADIUS_M), T::lit(y * CABLE_RADIUS_M)),
             end_m: T::lit(FREE_LENGTH_M),
         })?;
     }

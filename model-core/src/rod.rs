@@ -3,7 +3,7 @@
 //! Everything in SI units. Arc lengths `s` are reference (unstretched) lengths from the base.
 
 use heapless::Vec;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::constitutive::Stiffness;
 use crate::error::{ModelError, finite, finite_vec, non_negative, positive};
@@ -37,21 +37,36 @@ pub struct Guide<T> {
 
 /// A cable running through a hole at the same place in every guide, from the first guide to its
 /// termination, where it is fixed to the backbone at the same offset.
+///
+/// The hole is stored as a position, not as an angle and a radius, so that nothing on the controller
+/// evaluates a sine: [`Cable::at_angle`] converts at the edge.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cable<T> {
-    /// Angle of the hole about the local z axis, from local x, rad.
-    pub angle_rad: T,
-    /// Distance of the hole from the backbone, m.
-    pub radius_m: T,
+    /// The hole in the guide's cross-section, local frame `(x, y)`, m (`z` is along the backbone).
+    pub hole_m: Vector2<T>,
     /// Arc length of the termination, m (the tip for the thesis bench).
     pub end_m: T,
 }
 
 impl<T: Scalar> Cable<T> {
-    /// The hole's offset in the local frame: `radius (cos a, sin a, 0)`.
+    /// A cable whose hole is `radius_m` from the backbone at `angle_rad` about the local z axis,
+    /// from local x: `radius (cos a, sin a)`.
+    pub fn at_angle(angle_rad: T, radius_m: T, end_m: T) -> Self {
+        let (s, c) = angle_rad.sin_cos();
+        Self {
+            hole_m: Vector2::new(c, s) * radius_m,
+            end_m,
+        }
+    }
+
+    /// The hole's offset in the local frame, m.
     pub fn offset_local_m(&self) -> Vector3<T> {
-        let (s, c) = self.angle_rad.sin_cos();
-        Vector3::new(c, s, T::zero()) * self.radius_m
+        Vector3::new(self.hole_m.x, self.hole_m.y, T::zero())
+    }
+
+    /// Distance of the hole from the backbone, m.
+    pub fn radius_m(&self) -> T {
+        self.hole_m.norm()
     }
 }
 
@@ -233,8 +248,9 @@ impl<T: Scalar> Rod<T> {
             return Err(ModelError::Empty("guides (cables need at least one)"));
         }
         for cable in &self.cables {
-            finite(cable.angle_rad, "cable angle")?;
-            positive(cable.radius_m, "cable radius")?;
+            finite(cable.hole_m.x, "cable hole")?;
+            finite(cable.hole_m.y, "cable hole")?;
+            positive(cable.radius_m(), "cable radius")?;
             finite(cable.end_m, "cable termination")?;
             let first = self.guides.first().map_or(T::zero(), |g| g.s_m);
             if cable.end_m <= first || cable.end_m > length {

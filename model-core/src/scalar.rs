@@ -73,3 +73,20 @@ pub(crate) fn all_finite<T: Scalar, const R: usize, const C: usize>(
 ) -> bool {
     m.iter().all(|x| x.is_finite())
 }
+
+/// Sorts a short slice in place so that no element is `before` its predecessor (stable).
+///
+/// An insertion sort: the model sorts at most a few dozen breakpoints once, and a handful of singular
+/// values, where core's pattern-defeating quicksort would cost 4 KB of the controller's flash.
+pub(crate) fn insertion_sort<T: Copy>(xs: &mut [T], before: impl Fn(&T, &T) -> bool) {
+    for i in 1..xs.len() {
+        let mut j = i;
+        while j > 0 {
+            match (xs.get(j - 1), xs.get(j)) {
+                (Some(a), Some(b)) if before(b, a) => xs.swap(j - 1, j),
+                _ => break,
+            }
+            j -= 1;
+        }
+    }
+}

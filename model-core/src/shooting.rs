@@ -12,7 +12,7 @@ use heapless::Vec;
 use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{ModelError, finite_vec};
-use crate::integrate::{Seed, Sweep, sweep};
+use crate::integrate::{Sweep, Tangents, sweep};
 use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::report::{SolveReport, Termination};
@@ -142,7 +142,7 @@ impl Work {
 /// The outcome of one Newton solve at a fixed load scale.
 pub(crate) struct Newton<T> {
     pub u0: Vector3<T>,
-    pub sweep: Sweep<T, 3>,
+    pub sweep: Sweep<T>,
     pub residual: T,
     pub termination: Termination,
 }
@@ -150,11 +150,12 @@ pub(crate) struct Newton<T> {
 impl<T: Scalar> Newton<T> {
     /// The stability verdict from the final sweep's Jacobi fields.
     fn stability(&self, conservative: bool, length_m: T) -> Stability<T> {
+        let sw = &self.sweep;
         classify(
             conservative,
-            self.sweep.conjugate_point_m,
-            &Matrix3::from_columns(&self.sweep.d_moment_residual),
-            &Matrix3::from_columns(&self.sweep.d_tip_rotation),
+            sw.conjugate_point_m,
+            &Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]),
+            &Matrix3::from_columns(&[sw.d_rotation(0), sw.d_rotation(1), sw.d_rotation(2)]),
             length_m,
         )
     }
@@ -177,8 +178,8 @@ const DIRECT_ITERATIONS: u16 = 12;
 /// Levenberg-Marquardt on `u(0)` at load scale `alpha`: the Newton step when it reduces the residual
 /// (`mu = 0`), a damped step `(J^T J + mu diag(J^T J)) du = -J^T e` when it does not, with a trust region
 /// on `|du| L`.
-pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
-    model: &Model<T, A>,
+pub(crate) fn newton<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     load: &TipLoad<T>,
     alpha: T,
     start: Vector3<T>,
@@ -186,14 +187,12 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
     max_iterations: u16,
     work: &mut Work,
 ) -> Newton<T> {
-    let seeds = Seed::base_strain();
     let run = |u: &Vector3<T>, work: &mut Work| {
         work.sweep();
-        sweep::<T, A, 3>(
+        sweep(
             model,
             &model.inputs(u, load, alpha),
-            &seeds,
-            settings.check_stability,
+            Tangents::base_strain(settings.check_stability),
             None,
         )
     };
@@ -220,7 +219,7 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
                 termination: Termination::Converged,
             };
         }
-        let jacobian = Matrix3::from_columns(&sw.d_moment_residual);
+        let jacobian = Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]);
         let step = if mu == T::zero() {
             jacobian.lu().solve(&-sw.moment_residual_nm)
         } else {
@@ -309,8 +308,8 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>>(
 
 /// Load continuation from the unloaded rod (where `u(0) = 0` is exact) to the full load.
 /// `first_step` is the first load increment (a fraction of the full load).
-pub(crate) fn continuation<T: Scalar, A: Attitude<T>>(
-    model: &Model<T, A>,
+pub(crate) fn continuation<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    model: &Model<T, A, NODES>,
     load: &TipLoad<T>,
     settings: &ShootingSettings<T>,
     first_step: T,
@@ -371,7 +370,7 @@ pub(crate) fn continuation<T: Scalar, A: Attitude<T>>(
     None
 }
 
-impl<T: Scalar, A: Attitude<T>> Model<T, A> {
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     /// Solves the forward problem: the equilibrium under `load` (plus the scene's gravity and point loads).
     ///
     /// Fails only on invalid input; a solve that does not converge, or converges to an unstable

@@ -84,30 +84,60 @@ impl MultiTurn {
     /// [`UnwrapError::NotInTurn`] for an angle beyond one turn; [`UnwrapError::StepTooLarge`] when the
     /// shortest step from the last accepted read exceeds the limit. Either leaves the position as it was.
     pub fn update(&mut self, raw_counts: u16) -> Result<i64, UnwrapError> {
-        let turn = i64::from(self.counts_per_turn);
-        let raw = i64::from(raw_counts);
+        // `counts_per_turn` is in 4..=65536 (checked by `new`): every angle and step fits an i32.
+        let turn = i32::try_from(self.counts_per_turn).unwrap_or(i32::MAX);
+        let raw = i32::from(raw_counts);
         if raw >= turn {
             return Err(UnwrapError::NotInTurn { raw_counts });
         }
         let reference = self.position_counts.unwrap_or(self.home_counts);
+        let angle = i32::try_from(angle_of(reference, self.counts_per_turn)).unwrap_or(0);
         // The shortest signed step from the reference's angle to `raw`, in [-turn/2, turn/2).
-        let step = (raw - reference.rem_euclid(turn) + turn / 2).rem_euclid(turn) - turn / 2;
-        if self.position_counts.is_some() && step.unsigned_abs() > u64::from(self.max_step_counts) {
+        let step = (raw - angle + turn / 2).rem_euclid(turn) - turn / 2;
+        if self.position_counts.is_some() && step.unsigned_abs() > self.max_step_counts {
             return Err(UnwrapError::StepTooLarge {
-                // |step| <= turn / 2 <= 32768 fits an i32.
-                step_counts: i32::try_from(step).unwrap_or(i32::MAX),
+                step_counts: step,
                 limit_counts: self.max_step_counts,
             });
         }
-        let position = reference + step;
+        let position = reference.saturating_add(i64::from(step));
         self.position_counts = Some(position);
         Ok(position)
+    }
+}
+
+/// The angle of a multi-turn position, `position.rem_euclid(counts_per_turn)` for `counts_per_turn`
+/// in `1..=65536`, with 32-bit divisions only: the Cortex-M4 divides 32-bit integers in hardware,
+/// while a 64-bit remainder links a 1 KB software routine into the estimator's 64 KiB.
+///
+/// With `v` the position's two's-complement bits, `v = hi 2^32 + lo`; every partial product is
+/// below `2^16 2^16`, so nothing overflows.
+fn angle_of(position: i64, counts_per_turn: u32) -> u32 {
+    let m = counts_per_turn.max(1);
+    let bits = position.cast_unsigned();
+    let (hi, lo) = ((bits >> 32) as u32, bits as u32);
+    let b = (u32::MAX % m + 1) % m; // 2^32 mod m
+    let v = ((hi % m) * b % m + lo % m) % m;
+    if position < 0 {
+        // The bits are position + 2^64: take 2^64 mod m back off.
+        let c = b * b % m;
+        (v + m - c) % m
+    } else {
+        v
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn angle_is_the_euclidean_remainder(position in any::<i64>(), turn in 1u32..=65536) {
+            prop_assert_eq!(i64::from(angle_of(position, turn)), position.rem_euclid(i64::from(turn)));
+        }
+    }
 
     const TURN: u32 = 16384;
 

@@ -64,7 +64,7 @@ pub fn run() -> ! {
 }
 
 #[inline(never)]
-fn run_loop(model: &model_core::Model<f32>) -> ! {
+fn run_loop(model: &crate::config::BenchModel) -> ! {
     let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         defmt::error!("peripherals already taken");
         stop()

@@ -234,7 +234,7 @@ pub fn estimator() -> bool {
 }
 
 #[inline(never)]
-fn run_estimator(model: &model_core::Model<f32>) -> bool {
+fn run_estimator(model: &crate::config::BenchModel) -> bool {
     use crate::config::{MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
     use crate::control::{EstimatorLoop, read_all};
     use crate::encoder::SpoolEncoder;
