@@ -24,10 +24,13 @@ use nalgebra::{Matrix3, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
+/// 24 cases per property from a fixed seed (CI); `EXTREMES_CASES` and `EXTREMES_SEED` widen a local
+/// search.
 fn config() -> Config {
+    let env = |name: &str| std::env::var(name).ok().and_then(|v| v.parse::<u64>().ok());
     Config {
-        cases: 24,
-        rng_seed: RngSeed::Fixed(0x0e87_7e3e),
+        cases: env("EXTREMES_CASES").map_or(24, |n| u32::try_from(n).unwrap_or(u32::MAX)),
+        rng_seed: RngSeed::Fixed(env("EXTREMES_SEED").unwrap_or(0x0e87_7e3e)),
         failure_persistence: None,
         ..Config::default()
     }
@@ -229,12 +232,11 @@ proptest! {
     /// Tip forces from 0 to 832 g in any direction up to 150 degrees from the tangent (pushing back
     /// up to 60 degrees off the rod's axis) on the thesis bench (three cables, 100 steps): every cold
     /// solve converges to a verified answer or says it did not; a success is the equilibrium reached
-    /// by loading gradually from zero (when that path can be followed), to 1 um. (Nearer to pushing
-    /// straight back the cold solve can return an unstable equilibrium as stable: the full sphere
-    /// found 176 g at 175.5 degrees, kept as stress.rs
-    /// `bug_stability_test_misses_a_conjugate_point_at_100_steps`.)
+    /// by loading gradually from zero (when that path can be followed), to 1 um. The whole sphere of
+    /// directions: pushing straight back along the rod, past its buckling load, is where two
+    /// conjugate points coincide (stress.rs `coincident_conjugate_points_are_found_at_100_steps`).
     #[test]
-    fn tip_forces_to_832g_in_any_direction(kg in 0.0f64..0.832, polar in 0.0f64..(5.0 * PI / 6.0), azimuth in 0.0f64..TAU) {
+    fn tip_forces_to_832g_in_any_direction(kg in 0.0f64..0.832, polar in 0.0f64..PI, azimuth in 0.0f64..TAU) {
         tip_force_contract(kg, polar, azimuth)?;
     }
 

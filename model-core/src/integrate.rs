@@ -22,6 +22,7 @@ use crate::model::Model;
 use crate::plan::{NO_GUIDE, Node};
 use crate::rod::StrainModel;
 use crate::shape::{ShapePoint, ShapeSink};
+use crate::stability::ConjugateTrack;
 use crate::transitions::{strain_after, strain_tangent_after};
 use crate::{MAX_CABLES, Scalar};
 
@@ -430,14 +431,18 @@ impl<T: Scalar> Sweep<T> {
     }
 }
 
-/// The Jacobi fields of the clamped-free rod under dead loads: `H(s) = d theta(s) / d u(0)`, the first
-/// three tangents (seeded by the base strain, with the internal force fixed). `H ~ s I` near the base,
-/// so `det H > 0` there; a sign change on `(0, L]` is a conjugate point (the equilibrium is unstable).
-fn conjugate_point<T: Scalar>(tan: &[Tangent<T>]) -> bool {
-    match tan {
-        [a, b, c, ..] => Matrix3::from_columns(&[a.th, b.th, c.th]).determinant() <= T::zero(),
-        _ => false,
-    }
+/// The Jacobi fields at a grid point, for [`ConjugateTrack`]: `H = d theta / d u(0)` (the first three
+/// tangents' rotations) and `M = C du / d u(0)` (their moments), body frame.
+fn jacobi_fields<T: Scalar>(
+    tan: &[Tangent<T>],
+    c: &Vector3<T>,
+) -> Option<(Matrix3<T>, Matrix3<T>)> {
+    let [a, b, d, ..] = tan else {
+        return None;
+    };
+    let h = Matrix3::from_columns(&[a.th, b.th, d.th]);
+    let m = Matrix3::from_columns(&[a.u, b.u, d.u]);
+    Some((h, Matrix3::from_diagonal(c) * m))
 }
 
 fn is_finite_point<T: Scalar, A: Attitude<T>>(p: &Point<T, A>, tan: &[Tangent<T>]) -> bool {
@@ -496,6 +501,7 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const NODES: usize>(
     let mut frame_drift = T::zero();
     let mut proximal: Option<&Compliance<T>> = None;
     let mut stages = [Stage::zero(); 4];
+    let mut track = ConjugateTrack::new();
 
     let visit = |node: &Node<T>,
                  p: &Point<T, A>,
@@ -574,8 +580,12 @@ pub(crate) fn sweep<T: Scalar, A: Attitude<T>, const NODES: usize>(
                     *t = tangent_step(&field, &stages, d, h, t);
                 }
             }
-            if which.track_stability && conjugate_point_m.is_none() && conjugate_point(tan) {
-                conjugate_point_m = Some(s_next);
+            if which.track_stability && conjugate_point_m.is_none() {
+                let crossed = jacobi_fields(tan, &comp.c)
+                    .is_some_and(|(jh, jm)| track.crosses(&jh, &jm, comp.c.min(), len / steps));
+                if crossed {
+                    conjugate_point_m = Some(s_next);
+                }
             }
             s = s_next;
         }

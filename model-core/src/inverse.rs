@@ -29,7 +29,7 @@ use crate::integrate::{Sweep, Tangents, sweep};
 use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::plan::MAX_NODES;
-use crate::report::{SolveReport, Termination};
+use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
 use crate::shooting::{ShootingSettings, Start, TipLoad, default_tolerance};
 use crate::stability::{Stability, classify};
 use crate::{MAX_CABLES, Scalar};
@@ -279,6 +279,7 @@ struct Linearization<T, const P: usize> {
     d_tip_p: SMatrix<T, 3, P>,
     d_theta_tip_u: Matrix3<T>,
     conjugate_point_m: Option<T>,
+    frame_drift: T,
 }
 
 impl<T: Scalar, const P: usize> Linearization<T, P> {
@@ -296,6 +297,7 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
             d_tip_p: SMatrix::zeros(),
             d_theta_tip_u: Matrix3::identity(),
             conjugate_point_m: None,
+            frame_drift: T::zero(),
         }
     }
 
@@ -305,6 +307,7 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
         self.rc = rc;
         self.tip_position_m = sw.tip_position_m;
         self.tip_rotation = sw.tip_rotation;
+        self.frame_drift = sw.frame_drift;
     }
 }
 
@@ -472,6 +475,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             d_tip_p: Matrix3::from_columns(&[tip(3), tip(4), tip(5)]) * self.basis.force_n,
             d_theta_tip_u: Matrix3::from_columns(&[theta(0), theta(1), theta(2)]),
             conjugate_point_m: sw.conjugate_point_m,
+            frame_drift: sw.frame_drift,
         }
     }
 
@@ -602,7 +606,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             #[cfg(feature = "identifiability")]
             weakest_direction: SVector::zeros(),
             residual_rms_sigma,
-            determination: Determination::Undetermined,
+            // A misfit beyond three standard deviations is the verdict whatever else is known: no
+            // load explains the data, however well or badly the data would determine one.
+            determination: if residual_rms_sigma > T::lit(3.0) {
+                Determination::Inconsistent
+            } else {
+                Determination::Undetermined
+            },
         };
         let Some(red) = red else {
             return quality;
@@ -634,10 +644,10 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             .force_std_n
             .max()
             .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
-        quality.determination = if data.rank_deficient {
-            Determination::Undetermined
-        } else if residual_rms_sigma > T::lit(3.0) {
+        quality.determination = if residual_rms_sigma > T::lit(3.0) {
             Determination::Inconsistent
+        } else if data.rank_deficient {
+            Determination::Undetermined
         } else if worst > self.settings.max_force_std_n {
             Determination::Weak
         } else {
@@ -723,13 +733,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         };
         let tip_move = (lin.d_tip_u * du + lin.d_tip_p * dp).norm();
         // The tip-moment condition holds when its residual is small or, at the rounding floor, when
-        // the correction it asks for (`J_eu^-1 e`) is negligible.
+        // the correction it asks for (`J_eu^-1 e`) turns the base negligibly (what it does to the
+        // tip is in `tip_move` below, against the tip tolerance).
         let moment_ok = self
             .model
             .moment_converged(&lin.e, &x.u0, self.settings.tolerance)
             || self
                 .model
-                .step_converged(&red.b, &x.u0, self.settings.tolerance);
+                .step_converged(&red.b, &x.u0, T::zero(), self.settings.tolerance);
         let remaining = match previous_tip_move {
             Some(previous) if previous > T::zero() && tip_move < previous => {
                 let q = tip_move / previous;
@@ -1027,6 +1038,11 @@ where
         let red = self.reduce(lin);
         let quality = self.quality(lin, red.as_ref());
         let mut termination = termination;
+        if termination.is_success()
+            && !(lin.frame_drift.is_finite() && lin.frame_drift <= T::lit(MAX_FRAME_DRIFT))
+        {
+            termination = Termination::FrameDrift;
+        }
         let stability = if termination.is_success() && self.settings.check_stability {
             let verdict = self.stability(&x.p, lin);
             if !verdict.is_acceptable() {

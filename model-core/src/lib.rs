@@ -61,7 +61,7 @@ pub use error::ModelError;
 pub use kinematics::{Attitude, LieGroup, Quaternion, RotationMatrix};
 pub use mass::GuideMass;
 pub use model::{Evaluation, Model};
-pub use report::{SolveReport, Termination};
+pub use report::{MAX_FRAME_DRIFT, SolveReport, Termination};
 pub use rod::{Cable, Guide, PointLoad, Rod, Section, StrainModel};
 pub use scalar::Scalar;
 pub use shape::ShapePoint;

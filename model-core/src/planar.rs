@@ -11,8 +11,9 @@
 //! a forward sensitivity. Cable holes rotate with the frame about the plane's normal, so cable lengths
 //! and the 3D shape follow exactly.
 //!
-//! The stability test here is the in-plane one (`d theta / d k(0) > 0` along the rod and a positive
-//! free-end stiffness); an out-of-plane instability is not looked for.
+//! The stability test during the solve is the in-plane one (`d theta / d k(0) > 0` along the rod and
+//! a positive free-end stiffness); the answer then gets the 3D test (one 3D sweep with its Jacobi
+//! fields), since an instability out of the plane is invisible to the reduction.
 
 use nalgebra::{Matrix3, Vector2, Vector3};
 
@@ -39,6 +40,9 @@ pub struct Plane<T> {
     pub normal: Vector3<T>,
 }
 
+/// How far from planar (relative to `1 +` the magnitude tested) a scene may be for the reduction.
+const PLANE_TOLERANCE: f64 = 1e-9;
+
 /// The plane a rod and a tip load stay in, if they do: every force (gravity, point loads, tip)
 /// perpendicular to one normal that is perpendicular to the base tangent, every moment along it, and
 /// the section's bending stiffness about that normal a principal one. `None` otherwise.
@@ -47,12 +51,12 @@ pub fn plane_of<T: Scalar, A: Attitude<T>, const NODES: usize>(
     load: &TipLoad<T>,
 ) -> Option<Plane<T>> {
     let rod = model.rod();
+    let tol = T::lit(PLANE_TOLERANCE);
     let tangent = rod.base_orientation.column(2).into_owned();
     let forces = core::iter::once(rod.gravity_m_s2)
         .chain(core::iter::once(load.force_n))
         .chain(rod.loads.iter().map(|l| l.force_n));
     let moments = core::iter::once(load.moment_nm).chain(rod.loads.iter().map(|l| l.moment_nm));
-    let tol = T::lit(1e-9);
     // The normal: from the first force with a component across the tangent, else the first moment,
     // else the base's local x axis (any plane through the tangent will do).
     let candidate = forces
@@ -181,6 +185,8 @@ fn rk4<T: Scalar>(f: &Field<T>, s: T, h: T, y: &State<T>) -> State<T> {
 /// What one planar sweep gives.
 struct Sweep<T> {
     tip: Vector2<T>,
+    /// `d r(L) / d k(0)`, m^2.
+    d_tip: Vector2<T>,
     tangent: Vector2<T>,
     /// `E I k(L) - tau . normal`, N m, and its derivative with respect to `k(0)`.
     residual: T,
@@ -275,6 +281,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
         let mut conjugate_point_m = None;
         let mut out = Sweep {
             tip: Vector2::zeros(),
+            d_tip: Vector2::zeros(),
             tangent: Vector2::new(T::one(), T::zero()),
             residual: T::zero(),
             d_residual: T::zero(),
@@ -369,6 +376,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
             }
         }
         out.tip = y.r;
+        out.d_tip = y.dr;
         out.tangent = y.t;
         out.residual = ei_last * y.k - tip_moment * alpha;
         out.d_residual = ei_last * y.dk;
@@ -422,7 +430,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
             if step.abs() > max_step {
                 step = max_step * step.signum();
             }
-            if step.abs() * length <= settings.tolerance * relative {
+            // At the rounding floor: the correction turns the base, and moves the tip, by less than
+            // the tolerance (the tip test matters on a badly conditioned rod, where a small turn of
+            // the base still swings the tip).
+            let tip_move = (sw.d_tip * step).norm();
+            let at_floor = step.abs() * length <= settings.tolerance * relative
+                && tip_move <= settings.tolerance * length * relative;
+            if at_floor && tip_move <= settings.tolerance * length {
                 return (k0, sw, Termination::Converged);
             }
             work.0 = work.0.saturating_add(1);
@@ -439,7 +453,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
                 t *= T::lit(0.5);
             }
             if !accepted {
-                return (k0, sw, Termination::Stalled);
+                // At the rounding floor a correction that no longer helps means done.
+                let termination = if at_floor {
+                    Termination::Converged
+                } else {
+                    Termination::Stalled
+                };
+                return (k0, sw, termination);
             }
         }
         (k0, sw, Termination::IterationLimit)
@@ -457,10 +477,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
         }
     }
 
-    /// The equilibrium under `load` (which must be the one the plane was found for), by the 3D solve's
-    /// strategy: Newton on `k(0)` from the capped small-deflection guess, and if that fails or lands on
-    /// an unstable equilibrium, load continuation from the unloaded rod. The answer is an
-    /// [`crate::Equilibrium`] like the 3D solve's; a failure is reported, not hidden.
+    /// The equilibrium under `load`, by the 3D solve's strategy: Newton on `k(0)` from the capped
+    /// small-deflection guess, and if that fails or lands on an unstable equilibrium, load
+    /// continuation from the unloaded rod. The answer is an [`crate::Equilibrium`] like the 3D
+    /// solve's; a failure is reported, not hidden.
+    ///
+    /// # Errors
+    /// [`ModelError::OutOfRange`] when `load` leaves the plane (a force across it or a moment not
+    /// along its normal): the reduction would drop that part. Use [`plane_of`] for the load, or the
+    /// 3D solve.
     pub fn solve(
         &self,
         load: &TipLoad<T>,
@@ -468,6 +493,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
     ) -> Result<crate::Equilibrium<T>, ModelError> {
         finite_vec(&load.force_n, "tip force")?;
         finite_vec(&load.moment_nm, "tip moment")?;
+        let n = self.plane.normal;
+        let tol = T::lit(PLANE_TOLERANCE);
+        let across = load.force_n.dot(&n).abs() > tol * (T::one() + load.force_n.norm());
+        let askew = (load.moment_nm - n * load.moment_nm.dot(&n)).norm()
+            > tol * (T::one() + load.moment_nm.norm());
+        if across || askew {
+            return Err(ModelError::OutOfRange("tip load (it leaves the plane)"));
+        }
         crate::error::positive(settings.tolerance, "solver tolerance")?;
         let model = self.model;
         let length = model.length_m();
@@ -523,6 +556,20 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
         let mut stability = Stability::Unchecked;
         if termination.is_success() && settings.check_stability {
             stability = self.verdict(load, &sw);
+            if stability.is_acceptable() {
+                // Out of the plane (bending across it with twist: lateral buckling) the reduction sees
+                // nothing, so the answer gets the 3D test: one sweep with the Jacobi fields.
+                work.1 = work.1.saturating_add(1);
+                let u0 = local_normal * k0;
+                let full = crate::integrate::sweep(
+                    model,
+                    &model.inputs(&u0, load, T::one()),
+                    crate::integrate::Tangents::base_strain(true),
+                    None,
+                );
+                stability =
+                    crate::stability::of_sweep(model.conservative(&load.moment_nm), &full, length);
+            }
             if !stability.is_acceptable() {
                 termination = Termination::Unstable;
             }

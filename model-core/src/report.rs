@@ -18,7 +18,18 @@ pub enum Termination {
     Unstable,
     /// Load continuation could not reach the full load.
     ContinuationFailed,
+    /// The residual converged, but the integrated frame drifted from a rotation by more than
+    /// [`MAX_FRAME_DRIFT`]: the steps are too long for the attitude representation, and positions
+    /// and cable lengths are off by about that fraction (a finer grid, or the quaternion frame,
+    /// fixes it).
+    FrameDrift,
 }
+
+/// The largest `|R^T R - I|` an answer's frames may have: a frame that far from a rotation misplaces
+/// points by that fraction of their distance from the base (0.4 mm on the 39 cm bench). Drift comes
+/// from steps too long for the representation (the rotation-matrix frame past about one radian per
+/// step); rounding alone stays far below (f32, 10^4 steps: quaternion 4e-7, Lie group 4e-4).
+pub const MAX_FRAME_DRIFT: f64 = 1e-3;
 
 impl Termination {
     /// `true` only for a converged, verified answer.

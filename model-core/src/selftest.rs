@@ -660,6 +660,40 @@ pub fn wrong_branch_is_reported<T: Scalar>() -> Outcome {
     )
 }
 
+/// A weightless rod pushed back along itself, 10 degrees off its axis, at 26 times its buckling load
+/// (1.23 N): the nearly straight equilibrium next to the unloaded rod is unstable in the plane and
+/// across it at the same arc lengths, two conjugate points at once that `det H` cannot see. Started
+/// at the straight rod, the solver converges to it and must report it as unstable; a cold start must
+/// not return it (the stable rod is bent right over, its tip behind the base).
+pub fn pushed_back_past_buckling<T: Scalar>() -> Outcome {
+    let model = ok("model", Model::<T>::new(straight_rod(1, 20, 0.0)?))?;
+    let load = TipLoad::force(lit3([-1.2077, -0.2130, 0.0]));
+    let settings = ShootingSettings {
+        cold_fallback: false,
+        ..ShootingSettings::default()
+    };
+    let straight = ok(
+        "solve input",
+        model.solve(&load, Start::Warm(Vector3::zeros()), &settings),
+    )?;
+    holds(
+        "nearly straight root reached",
+        straight.tip_position_m.x.to_f64() > 0.3,
+    )?;
+    holds(
+        "reported unstable",
+        straight.report.termination == Termination::Unstable,
+    )?;
+    let cold = ok(
+        "solve input",
+        model.solve(&load, Start::Cold, &ShootingSettings::default()),
+    )?;
+    holds(
+        "cold start not on the straight branch",
+        !cold.report.termination.is_success() || cold.tip_position_m.x.to_f64() < 0.0,
+    )
+}
+
 /// Ten times the thesis's heaviest load: a cold start still reaches the stable, hanging branch.
 pub fn ten_times_heaviest_load<T: Scalar>() -> Outcome {
     let model = ok(
@@ -879,7 +913,7 @@ where
 }
 
 /// Every case, in a fixed order.
-pub fn cases<T: Scalar>() -> [Case; 20]
+pub fn cases<T: Scalar>() -> [Case; 21]
 where
     Params: ParamCount<T, 1> + ParamCount<T, 3>,
 {
@@ -927,6 +961,10 @@ where
         Case {
             name: "golden 3D inverse from cable lengths",
             run: golden_inverse::<T>,
+        },
+        Case {
+            name: "pushed back past buckling: two conjugate points at once",
+            run: pushed_back_past_buckling::<T>,
         },
         Case {
             name: "round trip: warm estimator tracks a 3D force",

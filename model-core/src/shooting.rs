@@ -15,8 +15,8 @@ use crate::error::{ModelError, finite_vec};
 use crate::integrate::{Sweep, Tangents, sweep};
 use crate::kinematics::Attitude;
 use crate::model::Model;
-use crate::report::{SolveReport, Termination};
-use crate::stability::{Stability, classify};
+use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
+use crate::stability::Stability;
 use crate::{MAX_CABLES, Scalar};
 
 /// The load at the tip, global frame.
@@ -150,14 +150,7 @@ pub(crate) struct Newton<T> {
 impl<T: Scalar> Newton<T> {
     /// The stability verdict from the final sweep's Jacobi fields.
     fn stability(&self, conservative: bool, length_m: T) -> Stability<T> {
-        let sw = &self.sweep;
-        classify(
-            conservative,
-            sw.conjugate_point_m,
-            &Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]),
-            &Matrix3::from_columns(&[sw.d_rotation(0), sw.d_rotation(1), sw.d_rotation(2)]),
-            length_m,
-        )
+        crate::stability::of_sweep(conservative, &self.sweep, length_m)
     }
 }
 
@@ -241,9 +234,17 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>, const NODES: usize>(
                 termination: Termination::Singular,
             };
         };
-        // At the rounding floor the residual stops decreasing; a Newton correction that turns the base
-        // by less than the tolerance means the answer is as good as the scalar type allows.
-        if mu == T::zero() && model.step_converged(&step, &u0, settings.tolerance) {
+        // At the rounding floor the residual stops decreasing. A Newton correction that turns the base
+        // and moves the tip by less than the tolerance may mean the answer is as good as the scalar
+        // type allows: it is when the tip move is negligible outright, or when the correction, tried,
+        // no longer lowers the residual. On a badly conditioned rod a correction that small can still
+        // lower the residual a hundredfold and move the tip by a tenth of a millimetre.
+        let tip_move =
+            (sw.d_position(0) * step.x + sw.d_position(1) * step.y + sw.d_position(2) * step.z)
+                .norm();
+        let at_floor =
+            mu == T::zero() && model.step_converged(&step, &u0, tip_move, settings.tolerance);
+        if at_floor && model.tip_move_negligible(tip_move, settings.tolerance) {
             return Newton {
                 u0,
                 sweep: sw,
@@ -270,6 +271,13 @@ pub(crate) fn newton<T: Scalar, A: Attitude<T>, const NODES: usize>(
                 mu = T::zero();
             }
             rejections = 0;
+        } else if at_floor {
+            return Newton {
+                u0,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
         } else {
             mu = if mu == T::zero() {
                 T::lit(1e-3)
@@ -451,9 +459,15 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     }),
                 };
         }
-        let Some((outcome, stability)) = result else {
+        let Some((mut outcome, stability)) = result else {
             return Ok(self.failed(load, Termination::ContinuationFailed, work, load_steps));
         };
+        if outcome.termination.is_success()
+            && !(outcome.sweep.frame_drift.is_finite()
+                && outcome.sweep.frame_drift <= T::lit(MAX_FRAME_DRIFT))
+        {
+            outcome.termination = Termination::FrameDrift;
+        }
 
         let mut cables = Vec::new();
         for c in outcome.sweep.cable_m.iter().take(self.rod().cables.len()) {

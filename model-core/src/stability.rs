@@ -6,11 +6,24 @@
 //! and `M(s) = d m(s) / d u(0)` (body frame, `M(L)` is the shooting Jacobian). The equilibrium is stable
 //! when (Jacobi's condition for a fixed-free interval):
 //!
-//! 1. `det H(s) > 0` on `(0, L]`: no conjugate point, and
+//! 1. no conjugate point on `(0, L]` (`H(s)` never singular), and
 //! 2. the free-end Riccati matrix `W = M(L) H(L)^-1` has a positive definite symmetric part.
 //!
+//! Conjugate points are found on the grid ([`ConjugateTrack`]) two ways. A sign change of `det H`
+//! finds an odd number in a step. An even number (two at once: a rod pushed back along itself past
+//! its buckling load bends in and across the plane alike, and near such symmetry two crossings fall
+//! in one step) leaves `det H` positive, so the Riccati matrix `W(s) = M(s) H(s)^-1`, `M = C dU`, is
+//! watched too. It is symmetric (the fields are Lagrangian), and it obeys `W' = -W C^-1 W + ...`:
+//! an eigenvalue heads to minus infinity at a conjugate point and returns from plus infinity, and
+//! once below `-c` with `c` large it can only keep falling. With `c = (min C) / (2 h)`, `h` the step,
+//! every eigenvalue that blows up within a step is below `-c` at the step's start and above it at the
+//! end, and nothing else crosses `-c` upward while the step resolves the rod's bending wavelength
+//! (the condition RK4 needs anyway). So a conjugate point is a drop in the count of eigenvalues below
+//! `-c` between grid points (both counted with the same `c`), by Descartes' rule on `W + c I`'s
+//! characteristic polynomial, exact for a symmetric matrix.
+//!
 //! Both come from the three tangents the Newton iteration already carries: the test costs a 3x3
-//! determinant per step and one 3x3 solve at the tip.
+//! solve per step and one more at the tip.
 //!
 //! The energy test needs conservative loads. Dead forces (gravity, hung masses, a tip force fixed
 //! in direction) are; a moment of fixed direction is not, in 3D (finite rotations do not commute:
@@ -22,6 +35,76 @@ use nalgebra::Matrix3;
 
 use crate::Scalar;
 
+/// Watches the Jacobi fields along a sweep for conjugate points (see the module documentation).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ConjugateTrack<T> {
+    /// The previous grid point's symmetric Riccati matrix `W` (N m / rad), the level `c` it was
+    /// last counted against, and its count of eigenvalues below `-c`.
+    previous: Option<(Matrix3<T>, T, usize)>,
+}
+
+impl<T: Scalar> ConjugateTrack<T> {
+    pub(crate) fn new() -> Self {
+        Self { previous: None }
+    }
+
+    /// Whether a conjugate point lies in the step (of `step_m`, on a section whose softest bending or
+    /// torsion stiffness is `stiffness_min_nm2`) that ended at the grid point with fields `h`, `m`.
+    pub(crate) fn crosses(
+        &mut self,
+        h: &Matrix3<T>,
+        m: &Matrix3<T>,
+        stiffness_min_nm2: T,
+        step_m: T,
+    ) -> bool {
+        if h.determinant() <= T::zero() {
+            return true;
+        }
+        let Some(h_inv) = h.try_inverse() else {
+            return true;
+        };
+        let w = m * h_inv;
+        let w = (w + w.transpose()) * T::lit(0.5);
+        let c = stiffness_min_nm2 * T::lit(0.5) / step_m;
+        let count = count_below(&w, c);
+        // Both counts against the same level: steps change length between intervals.
+        let crossed = self
+            .previous
+            .is_some_and(|(previous, level, previous_count)| {
+                let before = if level == c {
+                    previous_count
+                } else {
+                    count_below(&previous, c)
+                };
+                count < before
+            });
+        self.previous = Some((w, c, count));
+        crossed
+    }
+}
+
+/// The eigenvalues of the symmetric `w` below `-c`: the negative roots of `det(x I - (w + c I))
+/// = x^3 - a2 x^2 + a1 x - a0`, which by Descartes' rule (exact when every root is real) are the sign
+/// changes of `(1, a2, a1, a0)`.
+fn count_below<T: Scalar>(w: &Matrix3<T>, c: T) -> usize {
+    let a = w + Matrix3::identity() * c;
+    let a2 = a.trace();
+    let a1 = a.m11 * a.m22 - a.m12 * a.m21 + a.m11 * a.m33 - a.m13 * a.m31 + a.m22 * a.m33
+        - a.m23 * a.m32;
+    let a0 = a.determinant();
+    let mut changes = 0;
+    let mut last = T::one();
+    for x in [a2, a1, a0] {
+        if x != T::zero() {
+            if (x > T::zero()) != (last > T::zero()) {
+                changes += 1;
+            }
+            last = x;
+        }
+    }
+    changes
+}
+
 /// The stability verdict on an equilibrium.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -30,7 +113,7 @@ pub enum Stability<T> {
     Unchecked,
     /// Stable: a local minimum of the energy.
     Stable,
-    /// `det H` stops being positive at this arc length, m.
+    /// A conjugate point in the step ending at this arc length, m.
     ConjugatePoint(T),
     /// No conjugate point, but the free end has a negative stiffness direction (`W` indefinite).
     FreeEndUnstable,
@@ -43,6 +126,21 @@ impl<T> Stability<T> {
     pub fn is_acceptable(&self) -> bool {
         matches!(self, Self::Unchecked | Self::Stable | Self::NonConservative)
     }
+}
+
+/// The verdict on the sweep `sw`, which carried the three base-strain tangents with stability tracking.
+pub(crate) fn of_sweep<T: Scalar>(
+    conservative: bool,
+    sw: &crate::integrate::Sweep<T>,
+    length_m: T,
+) -> Stability<T> {
+    classify(
+        conservative,
+        sw.conjugate_point_m,
+        &Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]),
+        &Matrix3::from_columns(&[sw.d_rotation(0), sw.d_rotation(1), sw.d_rotation(2)]),
+        length_m,
+    )
 }
 
 /// The verdict from the sweep's conjugate-point track, the shooting Jacobian `M(L) = de/du0` and
