@@ -22,7 +22,7 @@ use crate::config::loop_config;
 use crate::fixture::REFERENCE;
 
 /// Step counts benchmarked (RK4 steps over the rod's one section).
-pub const STEP_COUNTS: [u16; 3] = [10, 20, 40];
+pub const STEP_COUNTS: [u16; 5] = [5, 10, 20, 40, 100];
 
 /// Warm updates measured per step count: ticks 1..=WARM_TICKS of the recorded force path.
 pub const WARM_TICKS: usize = 8;
