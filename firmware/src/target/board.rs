@@ -34,9 +34,12 @@ fn stop() -> ! {
     SCB::sys_reset()
 }
 
-/// The panic handler's body.
+/// The panic handler's body. The message is logged when it is a plain string: a formatted one would
+/// need `core::fmt`, 4 KB of flash.
 pub fn on_panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    defmt::error!("panic: {}", defmt::Display2Format(info));
+    let (file, line) = info.location().map_or(("?", 0), |l| (l.file(), l.line()));
+    let message = info.message().as_str().unwrap_or("(formatted message)");
+    defmt::error!("panicked at {}:{}: {}", file, line, message);
     stop()
 }
 

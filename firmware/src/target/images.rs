@@ -11,7 +11,7 @@ use crate::validate::Rejection;
 
 fn report_memory() {
     let m = memory::measure();
-    hprintln!(
+    crate::hostln!(
         "memory: flash {} B, static RAM {} B, stack high-water {} B, RAM total {} B",
         m.flash_bytes,
         m.static_ram_bytes,
@@ -227,7 +227,8 @@ pub fn estimator() -> bool {
     match &model {
         Ok(model) => run_estimator(model),
         Err(e) => {
-            hprintln!("model refused: {}", e);
+            defmt::error!("model refused: {}", e);
+            crate::hostln!("model refused (the reason is in the defmt log)");
             false
         }
     }
@@ -241,7 +242,7 @@ fn run_estimator(model: &crate::config::BenchModel) -> bool {
     use crate::fixture::{RecordedSensor, TICK_COUNT};
 
     let Ok(mut estimator) = EstimatorLoop::new(model, loop_config()) else {
-        hprintln!("loop settings refused");
+        crate::hostln!("loop settings refused");
         return false;
     };
     let [s0, s1, s2] = spools::<f32>();
@@ -253,7 +254,7 @@ fn run_estimator(model: &crate::config::BenchModel) -> bool {
         )
     };
     let (Ok(a), Ok(b), Ok(c)) = (spool(0, s0), spool(1, s1), spool(2, s2)) else {
-        hprintln!("spool calibration refused");
+        crate::hostln!("spool calibration refused");
         return false;
     };
     let mut sources = [a, b, c];
@@ -266,7 +267,7 @@ fn run_estimator(model: &crate::config::BenchModel) -> bool {
         }
     }
     report_memory();
-    hprintln!(
+    crate::hostln!(
         "estimator: {} fresh estimates in {} ticks",
         fresh,
         TICK_COUNT

@@ -10,9 +10,9 @@ pub mod board;
 pub mod counter;
 pub mod images;
 pub mod memory;
+pub mod text;
 
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
-use cortex_m_semihosting::hprintln;
 
 /// Ends the run: exit code 0 when `success`, 1 otherwise (QEMU's exit status, or the debugger's).
 pub fn exit(success: bool) -> ! {
@@ -23,15 +23,18 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
-/// The panic handler's body: say where, then exit with failure.
+/// The panic handler's body: say where, then exit with failure. The message is printed when it is a
+/// plain string (a formatted one would need `core::fmt`, see [`text`]).
 pub fn on_panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    hprintln!("panic: {}", info);
+    let (file, line) = info.location().map_or(("?", 0), |l| (l.file(), l.line()));
+    let message = info.message().as_str().unwrap_or("(formatted message)");
+    crate::hostln!("panicked at {}:{}: {}", file, line, message);
     exit(false)
 }
 
 /// The HardFault handler's body: say where, then exit with failure.
 pub fn on_hard_fault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    hprintln!(
+    crate::hostln!(
         "hard fault: pc {:#010x} lr {:#010x} xpsr {:#010x}",
         frame.pc(),
         frame.lr(),
