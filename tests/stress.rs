@@ -1983,13 +1983,12 @@ fn coincident_conjugate_points_are_found_at_100_steps() {
 /// `sin_cos_hot`): micromath's square root is a bit trick with a 2.5-6 % error (its documentation
 /// says "~5 %"), and it computes every chord between cable holes (integrate.rs `CableTrace`), so f32
 /// cable lengths on the golden bench come out up to 1.6 cm from f64, four orders of magnitude above
-/// an encoder's resolution (7.7 um), and the warm estimator converges on none of 640 updates along a
-/// path. (Its sin/cos, off by up to 1e-3, also take the Lie-group frame 0.02 to 0.55 from
+/// an encoder's resolution (7.7 um), while the solves report `Converged`. (Its sin/cos, off by up to 1e-3, also take the Lie-group frame 0.02 to 0.55 from
 /// orthonormal whenever a stage turns it by more than 0.01 rad: `frame_drift_per_representation`
 /// and `pure_tip_moment_past_a_full_turn_is_a_circle` fail under the feature.) On this host the
-/// feature is also no faster (report/host_timings.md), and the Cortex-M4F has an exact one-instruction
-/// square root. Passes without the feature; reproduce with
-/// `cargo test -p integration-tests --features model-core/fast-math --test stress -- --ignored bug_fast_math`.
+/// feature is also no faster (report/accuracy_cost.md), and the Cortex-M4F has an exact
+/// one-instruction square root. Passes without the feature; see it fail with
+/// `cargo test -p integration-tests --features model-core/fast-math --test stress -- f32_cable_lengths`.
 #[test]
 fn f32_cable_lengths_within_10_um_of_f64() {
     let m64 = build::<f64, Quaternion<f64>>(reference::golden_bench(40).expect("bench"));

@@ -10,6 +10,8 @@ use host_sim::scene::{Scene, SceneError};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
 
+mod study;
+
 #[derive(Parser)]
 #[command(
     version,
@@ -83,6 +85,10 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// The accuracy-vs-cost study of the model's variants (f64/f32, frames, reductions, steps):
+    /// report/accuracy_cost.md, .csv and the Pareto plot. `report/study.sh` adds the micromath rows.
+    /// Exits non-zero if a check fails.
+    Study(study::Args),
 }
 
 fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
@@ -166,6 +172,7 @@ fn estimate_text(e: &run::EstimateOutput) -> String {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Study(args) => return study::main(&args),
         Command::Validate { plots } => match thesis::validate() {
             Ok(v) => {
                 print!("{}", report::validation(&v));

@@ -18,7 +18,8 @@ use crate::scene::SceneError;
 use crate::scenes;
 use crate::thesis::{CM_PER_M, Curve, KG_PER_G, Table41, Table43, Table45, Validation};
 
-const FONT: &str = "sans-serif";
+/// The family name plot text is drawn in, once [`ensure_font`] has registered it.
+pub const FONT: &str = "sans-serif";
 
 fn font_paths() -> Vec<PathBuf> {
     let mut paths = vec![PathBuf::from(
@@ -44,8 +45,11 @@ fn font_paths() -> Vec<PathBuf> {
     paths
 }
 
-/// Registers a TrueType font for plot text, once per process.
-fn ensure_font() -> Result<(), SceneError> {
+/// Registers a TrueType font for plot text as [`FONT`], once per process.
+///
+/// # Errors
+/// No usable TrueType font under `/usr/share/fonts`.
+pub fn ensure_font() -> Result<(), SceneError> {
     static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
     REGISTERED
         .get_or_init(|| {

@@ -319,3 +319,75 @@ fn calibrate_fits_a_modulus_inside_the_measured_range() {
     // Piped: no progress bar on stdout or stderr.
     assert!(!stderr(&out).contains("fits"), "{}", stderr(&out));
 }
+
+#[test]
+fn quick_study_writes_its_report_and_every_check_passes() {
+    let dir = temp_dir("study");
+    let out = host_sim(&["study", "--quick", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}\n{}", stdout(&out), stderr(&out));
+    let text = stdout(&out);
+    assert!(!text.contains("FAIL"), "{text}");
+    assert!(
+        text.matches("\nok ").count() + usize::from(text.starts_with("ok ")) >= 15,
+        "{text}"
+    );
+
+    let report = std::fs::read_to_string(dir.join("accuracy_cost.md")).expect("report");
+    assert!(report.contains(" passed, 0 failed)"), "{report}");
+    for section in [
+        "## Conclusions from this run",
+        "## Error and cost by variant",
+        "## Model only what a scene requires",
+        "## Cortex-M4F instruction counts",
+    ] {
+        assert!(report.contains(section), "no {section}");
+    }
+
+    // One CSV line per scene, family and step count: three step counts in quick mode; the planar
+    // reductions only on the in-plane exp-2 scenes.
+    let csv = std::fs::read_to_string(dir.join("accuracy_cost.csv")).expect("csv");
+    let lines: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(lines.len(), 3 * (12 + 12 + 8), "{csv}");
+    let column = |name: &str| {
+        csv.lines()
+            .next()
+            .and_then(|h| h.split(',').position(|c| c == name))
+            .expect(name)
+    };
+    let (reduction, steps, error) = (
+        column("reduction"),
+        column("steps_per_section"),
+        column("error_um"),
+    );
+    for line in &lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        if fields[reduction] == "3D" && fields[steps] == "100" && fields[1] == "f64" {
+            let e: f64 = fields[error].parse().expect("an error in um");
+            assert!(e < 0.01, "f64 3D at 100 steps: {line}");
+        }
+    }
+
+    for (name, min_bytes) in [("pareto.svg", 20_000), ("pareto.png", 50_000)] {
+        let len = std::fs::metadata(dir.join(name)).map_or(0, |m| m.len());
+        assert!(len > min_bytes, "{name}: {len} bytes");
+    }
+}
+
+#[test]
+fn study_refuses_an_unknown_scene() {
+    let dir = temp_dir("study-bad");
+    let out = host_sim(&[
+        "study",
+        "--quick",
+        "--scenes",
+        "nowhere",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("unknown \"nowhere\""),
+        "{}",
+        stderr(&out)
+    );
+}

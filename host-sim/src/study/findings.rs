@@ -1,0 +1,602 @@
+//! The conclusions of a study run, computed from its rows (so that the quick run's report says what
+//! its own numbers say).
+
+use super::Study;
+use super::measure::Row;
+use super::reductions::MAIN_TOLERANCE_M;
+use super::variants::{Arithmetic, Family, Frame, Reduction};
+use super::write::{sig, us};
+
+/// The reference family with another arithmetic, frame or reduction.
+pub fn family(arithmetic: Arithmetic, frame: Frame, reduction: Reduction) -> Family {
+    Family {
+        arithmetic,
+        frame,
+        reduction,
+    }
+}
+
+/// A scene's rows of one family, by steps per section.
+pub fn series<'a>(study: &'a Study, scene: &str, family: &Family) -> Vec<&'a Row> {
+    let mut rows: Vec<&Row> = study
+        .rows
+        .iter()
+        .filter(|r| r.scene == scene && r.family == *family)
+        .collect();
+    rows.sort_by_key(|r| r.steps_per_section);
+    rows
+}
+
+/// The first row of a series whose error is within `tolerance_m`.
+pub fn fewest<'a>(rows: &[&'a Row], tolerance_m: f64) -> Option<&'a Row> {
+    rows.iter()
+        .copied()
+        .find(|r| r.error_m().is_some_and(|e| e <= tolerance_m))
+}
+
+/// Median, smallest and largest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    /// Median.
+    pub median: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Spread {
+    /// Of finite values; `None` if there are none.
+    pub fn of(values: &[f64]) -> Option<Self> {
+        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return None;
+        }
+        let median = super::measure::median(&mut v);
+        Some(Self {
+            median,
+            min: v.first().copied().unwrap_or(median),
+            max: v.last().copied().unwrap_or(median),
+        })
+    }
+
+    /// "1.2x (1.1-1.4x)".
+    pub fn ratio(&self) -> String {
+        format!("{:.2}x ({:.2}-{:.2}x)", self.median, self.min, self.max)
+    }
+}
+
+/// `f(a, b)` over every pair of rows of families `a` and `b` on the same scene and step count
+/// (`min_steps` and up).
+pub fn paired(
+    study: &Study,
+    a: &Family,
+    b: &Family,
+    min_steps: u16,
+    f: impl Fn(&Row, &Row) -> Option<f64>,
+) -> Vec<f64> {
+    study
+        .rows
+        .iter()
+        .filter(|r| r.family == *a && r.steps_per_section >= min_steps)
+        .filter_map(|r| {
+            study
+                .rows
+                .iter()
+                .find(|q| {
+                    q.family == *b
+                        && q.scene == r.scene
+                        && q.steps_per_section == r.steps_per_section
+                })
+                .and_then(|q| f(r, q))
+        })
+        .collect()
+}
+
+fn time_ratio(a: &Row, b: &Row) -> Option<f64> {
+    Some(a.host_time_us / b.host_time_us)
+}
+
+fn error_ratio(a: &Row, b: &Row) -> Option<f64> {
+    Some(a.error_m()? / b.error_m()?)
+}
+
+fn keys(study: &Study) -> Vec<&str> {
+    study.scenes.iter().map(|s| s.scene.key.as_str()).collect()
+}
+
+fn join(parts: &[String]) -> String {
+    match parts {
+        [] => String::new(),
+        [one] => one.clone(),
+        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
+
+fn convergence(study: &Study) -> String {
+    let reference = Family::REFERENCE;
+    let mut tens = Vec::new();
+    let mut ones = Vec::new();
+    let mut orders = Vec::new();
+    for key in keys(study) {
+        let rows = series(study, key, &reference);
+        let at = |tol: f64| match fewest(&rows, tol) {
+            Some(r) => format!(
+                "{} on {key} ({} um, {} us)",
+                r.steps_per_section,
+                sig(r.error_m().unwrap_or(f64::NAN) * 1e6),
+                us(r.host_time_us)
+            ),
+            None => format!("none of the step counts on {key}"),
+        };
+        tens.push(at(MAIN_TOLERANCE_M));
+        ones.push(at(1e-6));
+        let e = |n: u16| {
+            rows.iter()
+                .find(|r| r.steps_per_section == n)
+                .and_then(|r| r.error_m())
+        };
+        if let (Some(a), Some(b)) = (e(20), e(100)) {
+            orders.push((a / b).ln() / 5f64.ln());
+        }
+    }
+    let order = Spread::of(&orders)
+        .map(|s| {
+            format!(
+                " Between 20 and 100 steps the error falls as steps^-{:.1} to steps^-{:.1}: RK4's fourth order.",
+                s.min, s.max
+            )
+        })
+        .unwrap_or_default();
+    format!(
+        "**Steps (f64, quaternion, full 3D model).** The error (worst of tip, backbone points and cable \
+         lengths) is within 10 um from {} steps per section; within 1 um from {}.{order}",
+        join(&tens),
+        join(&ones)
+    )
+}
+
+fn failures(study: &Study, arithmetics: &[Arithmetic]) -> Vec<String> {
+    let mut groups: Vec<(String, Vec<u16>)> = Vec::new();
+    for r in study
+        .rows
+        .iter()
+        .filter(|r| !r.converged() && arithmetics.contains(&r.family.arithmetic))
+    {
+        let termination = r
+            .termination
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_string();
+        let label = format!("{} on {}: {termination}", r.family.label(), r.scene);
+        match groups.iter_mut().find(|g| g.0 == label) {
+            Some(g) => g.1.push(r.steps_per_section),
+            None => groups.push((label, vec![r.steps_per_section])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(label, steps)| {
+            let steps: Vec<String> = steps.iter().map(u16::to_string).collect();
+            format!("{label} at {} steps", steps.join(", "))
+        })
+        .collect()
+}
+
+fn frames(study: &Study) -> String {
+    let q = Family::REFERENCE;
+    let rm = family(
+        Arithmetic::F64,
+        Frame::RotationMatrix,
+        Reduction::Cosserat3d,
+    );
+    let lg = family(Arithmetic::F64, Frame::LieGroup, Reduction::Cosserat3d);
+    let spread = |v: Vec<f64>| Spread::of(&v);
+    let show = |s: Option<Spread>| s.map_or("n/a".into(), |s| s.ratio());
+    let (rm_error, lg_error) = (
+        spread(paired(study, &rm, &q, 10, error_ratio)),
+        spread(paired(study, &lg, &q, 10, error_ratio)),
+    );
+    let (rm_time, lg_time) = (
+        spread(paired(study, &rm, &q, 0, time_ratio)),
+        spread(paired(study, &lg, &q, 0, time_ratio)),
+    );
+    let most_accurate = [(&rm_error, "rotation matrix"), (&lg_error, "Lie group")]
+        .iter()
+        .filter(|(e, _)| e.is_some_and(|e| e.median < 1.0))
+        .map(|(_, name)| *name)
+        .collect::<Vec<_>>();
+    let verdict = if most_accurate.is_empty() {
+        "At equal steps the quaternion is the most accurate of the three".to_string()
+    } else {
+        format!(
+            "At equal steps the {} beats the quaternion's accuracy",
+            most_accurate.join(" and the ")
+        )
+    };
+    // At fourth order, an error `r` times larger takes `r^(1/4)` times the steps to make up.
+    let trade = |name: &str, error: &Option<Spread>, time: &Option<Spread>| match (error, time) {
+        (Some(e), Some(t)) if t.median < 1.0 => Some(format!(
+            "the {name} frame saves {:.0} % of the time per solve at equal steps, while matching the \
+             quaternion's error would take about {:.2}x the steps (RK4's fourth order: the error \
+             ratio to the 1/4)",
+            (1.0 - t.median) * 100.0,
+            e.median.max(1.0).powf(0.25)
+        )),
+        _ => None,
+    };
+    let trades: Vec<String> = [
+        trade("rotation-matrix", &rm_error, &rm_time),
+        trade("Lie-group", &lg_error, &lg_time),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let cost = if trades.is_empty() {
+        ", and no other frame is cheaper per solve".to_string()
+    } else {
+        format!("; {}", trades.join("; "))
+    };
+    let failed = failures(study, &[Arithmetic::F64, Arithmetic::F32]);
+    let failed = if failed.is_empty() {
+        "Every libm solve converged.".to_string()
+    } else {
+        format!(
+            "Solves refused (a row with its termination, no error): {}.",
+            failed.join("; ")
+        )
+    };
+    format!(
+        "**Frames (f64, same steps).** Against the quaternion, the rotation-matrix frame's error is \
+         {} and the Lie group's {} (10 steps per section and up, all scenes); their time per solve is \
+         {} and {}. {verdict}{cost}. {failed}",
+        show(rm_error),
+        show(lg_error),
+        show(rm_time),
+        show(lg_time),
+    )
+}
+
+fn kirchhoff(study: &Study) -> String {
+    let k = family(Arithmetic::F64, Frame::Quaternion, Reduction::Kirchhoff3d);
+    let mut floors = Vec::new();
+    for key in keys(study) {
+        let best = series(study, key, &k)
+            .iter()
+            .filter_map(|r| r.error_m())
+            .reduce(f64::min);
+        if let Some(e) = best {
+            floors.push(format!("{} um on {key}", sig(e * 1e6)));
+        }
+    }
+    let time = Spread::of(&paired(study, &k, &Family::REFERENCE, 0, time_ratio))
+        .map_or("n/a".into(), |s| s.ratio());
+    format!(
+        "**Kirchhoff** (inextensible, unshearable) stops improving at {}: its modelling error, enough \
+         for a 10 um tolerance and not for 1 um. Its time per solve is {time} the Cosserat model's.",
+        join(&floors)
+    )
+}
+
+/// The median sweeps per cold solve of a family, over its scenes and step counts.
+fn median_sweeps(study: &Study, family: &Family) -> Option<f64> {
+    let sweeps: Vec<f64> = study
+        .rows
+        .iter()
+        .filter(|r| r.family == *family)
+        .map(|r| r.sweeps_per_solve)
+        .collect();
+    Spread::of(&sweeps).map(|s| s.median)
+}
+
+fn planar(study: &Study) -> Option<String> {
+    let p = family(Arithmetic::F64, Frame::Quaternion, Reduction::Planar);
+    let q = Family::REFERENCE;
+    let time = Spread::of(&paired(study, &p, &q, 0, time_ratio))?;
+    let error = Spread::of(&paired(study, &p, &q, 0, error_ratio))?;
+    let (sp, sq) = (median_sweeps(study, &p)?, median_sweeps(study, &q)?);
+    Some(format!(
+        "**Planar reduction** (in-plane scenes): at equal steps an error {:.2}x the 3D model's \
+         (median) in {} of its time per cold solve. Its deterministic work is no smaller ({} sweeps \
+         per solve against {}, the last one the 3D stability test): its steps are cheaper, five \
+         states and one tangent against sixteen states and three tangents.",
+        error.median,
+        time.ratio(),
+        sig(sp),
+        sig(sq)
+    ))
+}
+
+fn f32_floor(study: &Study) -> String {
+    let q32 = family(Arithmetic::F32, Frame::Quaternion, Reduction::Cosserat3d);
+    let mut best = Vec::new();
+    for key in keys(study) {
+        if let Some(e) = series(study, key, &q32)
+            .iter()
+            .filter_map(|r| r.error_m())
+            .reduce(f64::min)
+        {
+            best.push(format!("{} um on {key}", sig(e * 1e6)));
+        }
+    }
+    let solve = study.floors.iter().map(|f| f.solve_m).fold(0.0, f64::max);
+    let sweep = study.floors.iter().map(|f| f.sweep_m).fold(0.0, f64::max);
+    let cause = if solve > 3.0 * sweep {
+        "the floor is the f32 solve's stopping tolerance (2.4e-5 of E I / L), not f32 arithmetic"
+    } else {
+        "the floor is f32 arithmetic itself"
+    };
+    let time = Spread::of(&paired(study, &q32, &Family::REFERENCE, 0, time_ratio))
+        .map_or("n/a".into(), |s| s.ratio());
+    let sweeps = |f: &Family| median_sweeps(study, f).unwrap_or(f64::NAN);
+    format!(
+        "**f32 (libm)** bottoms out at {} (best over the step counts). On the same grid the f32 \
+         solve's tip lies up to {} um from f64's, while one f32 sweep at the f64 answer's base strain \
+         is within {} um: {cause}. On the host f32 takes {time} f64's time, mostly from fewer sweeps \
+         ({} per solve against {}).",
+        join(&best),
+        sig(solve * 1e6),
+        sig(sweep * 1e6),
+        sig(sweeps(&q32)),
+        sig(sweeps(&Family::REFERENCE))
+    )
+}
+
+/// Steps per section from which the micromath paragraph compares cable errors (below it the
+/// discretisation error of either arithmetic dominates).
+const MICROMATH_MIN_STEPS: u16 = 10;
+
+fn micromath(study: &Study) -> String {
+    if !study.micromath {
+        return "**micromath**: not in this run (`report/study.sh` builds with `--features \
+                fast-math` and merges its rows)."
+            .into();
+    }
+    let mm: Vec<&Row> = study
+        .rows
+        .iter()
+        .filter(|r| r.family.arithmetic == Arithmetic::F32Micromath)
+        .collect();
+    let cable = |planar: bool, arithmetic: Arithmetic| {
+        study
+            .rows
+            .iter()
+            .filter(|r| {
+                r.family.arithmetic == arithmetic
+                    && r.family.reduction.planar() == planar
+                    && r.steps_per_section >= MICROMATH_MIN_STEPS
+            })
+            .filter_map(|r| r.cable_error_m)
+            .fold(0.0, f64::max)
+    };
+    let q = |a| family(a, Frame::Quaternion, Reduction::Cosserat3d);
+    let tip = Spread::of(&paired(
+        study,
+        &q(Arithmetic::F32Micromath),
+        &q(Arithmetic::F32),
+        0,
+        |a, b| Some(a.tip_error_m? / b.tip_error_m?),
+    ))
+    .map_or("n/a".into(), |s| s.ratio());
+    let planar = |a| family(a, Frame::Quaternion, Reduction::Planar);
+    let same = paired(
+        study,
+        &planar(Arithmetic::F32Micromath),
+        &planar(Arithmetic::F32),
+        0,
+        |a, b| Some(f64::from(u8::from(a.error_m()? == b.error_m()?))),
+    );
+    let planar_same = if !same.is_empty() && same.iter().all(|x| *x == 1.0) {
+        " The planar reduction never calls the approximated functions: its micromath rows have \
+         exactly the libm rows' errors."
+    } else {
+        ""
+    };
+    let lie: Vec<&&Row> = mm
+        .iter()
+        .filter(|r| r.family.frame == Frame::LieGroup)
+        .collect();
+    let drift = lie
+        .iter()
+        .filter(|r| r.termination.starts_with("FrameDrift"))
+        .count();
+    let lie_worst = lie.iter().filter_map(|r| r.tip_error_m).fold(0.0, f64::max);
+    let time: Vec<f64> = mm
+        .iter()
+        .filter(|r| !r.family.reduction.planar())
+        .filter_map(|r| {
+            let libm = Family {
+                arithmetic: Arithmetic::F32,
+                ..r.family
+            };
+            study
+                .rows
+                .iter()
+                .find(|q| {
+                    q.family == libm
+                        && q.scene == r.scene
+                        && q.steps_per_section == r.steps_per_section
+                })
+                .map(|q| r.host_time_us / q.host_time_us)
+        })
+        .collect();
+    let time = Spread::of(&time).map_or("n/a".into(), |s| s.ratio());
+    format!(
+        "**micromath** (model-core's `fast-math`, f32): from {MICROMATH_MIN_STEPS} steps per section \
+         on, cable lengths are off by up to {} mm in the 3D families (its square root, 2.5-6 % off, \
+         sums the chords between guides), against {} um with libm, while the solves report \
+         `Converged`.{planar_same} Tips with the quaternion frame are {tip} libm's (the frame's \
+         normalisation sits near 1, where the approximation is good). The Lie-group frame breaks: \
+         {drift} of {} solves end in FrameDrift, and those that pass the drift test are up to {} mm \
+         off at the tip. The 3D families' time per solve is {time} libm's, timed in a separate run of \
+         a separate build (so the ratio also carries the machine's drift between runs): whatever it \
+         saves, the cable lengths are unusable.",
+        sig(cable(false, Arithmetic::F32Micromath) * 1e3),
+        sig(cable(false, Arithmetic::F32) * 1e6),
+        lie.len(),
+        sig(lie_worst * 1e3),
+    )
+}
+
+/// The warm-update instruction target of the Cortex-M4F, per update.
+const UPDATE_TARGET_INSTRUCTIONS: u64 = 150_000;
+/// The accuracy that must come with it: the tip within this of the converged f64 answer, m.
+const UPDATE_TARGET_TIP_M: f64 = 1e-4;
+
+fn mcu(study: &Study) -> Option<String> {
+    let m = &study.mcu;
+    let at = |n: u16| m.rows.iter().find(|r| r.qemu.steps_per_section == n);
+    let firmware = at(20).or_else(|| m.rows.first())?;
+    let fewest = m.rows.first()?;
+    let describe = |r: &super::mcu::McuRow| {
+        format!(
+            "{} steps per section: {} instructions ({:.2} ms at 168 MHz if each took one cycle, a \
+             lower bound), error {} um",
+            r.qemu.steps_per_section,
+            r.qemu.cold_instructions,
+            r.qemu.cold_instructions as f64 / 168e3,
+            sig(r.host_f32.error_m().unwrap_or(f64::NAN) * 1e6)
+        )
+    };
+    let floor_from = m
+        .rows
+        .iter()
+        .find(|r| {
+            matches!(
+                (r.host_f64.error_m(), r.host_f32.error_m()),
+                (Some(e64), Some(e32)) if e64 < e32 / 4.0
+            )
+        })
+        .map_or("none of the step counts".into(), |r| {
+            format!("{} steps per section", r.qemu.steps_per_section)
+        });
+    // The one-sweep update against the converged f64 answer: its lag behind the same f32 model's
+    // forward solve plus that model's error (the triangle inequality: a bound, not a measurement).
+    let updates: Vec<String> = m
+        .rows
+        .iter()
+        .filter_map(|r| {
+            let n = r.qemu.update_one_sweep_instructions?;
+            let bound = r.qemu.update_one_sweep_lag_m? + r.host_f32.error_m()?;
+            let meets = n <= UPDATE_TARGET_INSTRUCTIONS && bound <= UPDATE_TARGET_TIP_M;
+            Some(format!(
+                "{} steps: {n} instructions, tip within {} um{}",
+                r.qemu.steps_per_section,
+                sig(bound * 1e6),
+                if meets { " (meets both)" } else { "" }
+            ))
+        })
+        .collect();
+    let warm = m
+        .rows
+        .iter()
+        .filter_map(|r| r.qemu.update_warm_instructions)
+        .min()
+        .map_or("n/a".into(), |n| n.to_string());
+    Some(format!(
+        "**Cortex-M4F** (QEMU instruction counts; errors computed on the host in f32): a plain sweep \
+         costs {:.0} instructions per RK4 step. A cold f32 solve of the golden bench at {}; at {}. \
+         The f32 error is f32's floor (the f64 model's is under a quarter of it) from {floor_from}. \
+         The target of a warm 3D update within {UPDATE_TARGET_INSTRUCTIONS} instructions with the tip \
+         within {} mm of the converged f64 answer: the update that converges every tick costs at least \
+         {warm} instructions; the one-sweep update (one sweep with six tangents and one Newton step \
+         per tick), bounded by its lag behind the same model's forward solve plus that model's error: \
+         {}.",
+        m.instructions_per_step,
+        describe(firmware),
+        describe(fewest),
+        UPDATE_TARGET_TIP_M * 1e3,
+        join(&updates)
+    ))
+}
+
+fn reductions(study: &Study) -> String {
+    let total = study.reductions.len();
+    let met = study.reductions.iter().filter(|r| r.meets()).count();
+    let mut picks = Vec::new();
+    let mut speedups = Vec::new();
+    for r in study
+        .reductions
+        .iter()
+        .filter(|r| r.tolerance_m == MAIN_TOLERANCE_M)
+    {
+        picks.push(format!(
+            "{} at {} steps ({}, {})",
+            r.picked.label(),
+            r.picked_steps,
+            r.scene,
+            r.case_label.split(':').next().unwrap_or("")
+        ));
+        let full = r.full().and_then(|c| c.row.as_ref());
+        let pick = r
+            .candidates
+            .iter()
+            .find(|c| c.reduction == r.picked)
+            .and_then(|c| c.row.as_ref());
+        if let (Some(f), Some(p)) = (full, pick) {
+            speedups.push(f.host_time_us / p.host_time_us);
+        }
+    }
+    let speedup = Spread::of(&speedups).map_or("n/a".into(), |s| s.ratio());
+    let bookkeeping: Vec<String> = study
+        .reductions
+        .iter()
+        .filter_map(|r| {
+            let b = r.bookkeeping.as_ref()?;
+            Some(format!(
+                "{} um on {}",
+                sig(b.average.error_m()? * 1e6),
+                r.scene
+            ))
+        })
+        .collect();
+    let bookkeeping = if bookkeeping.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " Skipping the guides' mass bookkeeping under gravity (average instead of accurate guide \
+             mass) is a different model, not a cheaper discretisation: {} off, far beyond 10 um; \
+             without gravity the plan drops it by itself, at no error.",
+            join(&bookkeeping)
+        )
+    };
+    format!(
+        "**Reductions.** `reduction::choose`'s pick meets its tolerance against this study's \
+         reference in {met} of {total} cases. For 10 um it picks {}; measured on the host, {speedup} \
+         faster than the full 3D model at its own fewest steps for the tolerance.{bookkeeping}",
+        join(&picks)
+    )
+}
+
+fn fronts(study: &Study) -> String {
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    for r in study.rows.iter().filter(|r| r.front_time) {
+        let label = r.family.label();
+        match counts.iter_mut().find(|c| c.0 == label) {
+            Some(c) => c.1 += 1,
+            None => counts.push((label, 1)),
+        }
+    }
+    counts.sort_by_key(|c| std::cmp::Reverse(c.1));
+    let list: Vec<String> = counts
+        .iter()
+        .map(|(label, n)| format!("{label} ({n})"))
+        .collect();
+    format!(
+        "**Pareto fronts** (host time against error, all scenes): {}.",
+        join(&list)
+    )
+}
+
+/// The conclusions, one paragraph each.
+pub fn conclusions(study: &Study) -> Vec<String> {
+    let mut out = vec![convergence(study), frames(study), kirchhoff(study)];
+    out.extend(planar(study));
+    out.push(f32_floor(study));
+    out.push(micromath(study));
+    out.extend(mcu(study));
+    out.push(reductions(study));
+    out.push(fronts(study));
+    out
+}

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The accuracy-vs-cost study: report/accuracy_cost.md, .csv and pareto.svg/.png.
+#   report/study.sh            the full study, written into report/
+#   report/study.sh --quick    CI's quick mode, written into target/study-quick/
+# Options: --out DIR (where to write). Exits non-zero if a check of the study fails.
+#
+# micromath is a compile-time feature of model-core (`fast-math`), so its rows come from a second
+# build of host-sim, run first and merged into the report by the ordinary build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+quick=()
+out=""
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --quick) quick=(--quick) ;;
+        --out) out="$2"; shift ;;
+        *) echo "usage: report/study.sh [--quick] [--out DIR]" >&2; exit 2 ;;
+    esac
+    shift
+done
+if [ -z "$out" ]; then
+    if [ ${#quick[@]} -gt 0 ]; then out=target/study-quick; else out=report; fi
+fi
+mkdir -p "$out" target
+rows="target/study-micromath-rows.json"
+
+echo "== f32 micromath rows (host-sim built with model-core's fast-math feature)"
+cargo run --release --quiet -p host-sim --features fast-math -- \
+    study "${quick[@]}" --fast-math-only --rows-out "$rows"
+
+echo "== the study, micromath rows merged, into $out"
+cargo run --release --quiet -p host-sim -- study "${quick[@]}" --merge "$rows" --out "$out"
