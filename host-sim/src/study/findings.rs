@@ -142,8 +142,13 @@ fn convergence(study: &Study) -> String {
     }
     let order = Spread::of(&orders)
         .map(|s| {
+            let fourth = if s.min > 3.5 && s.max < 4.5 {
+                ": RK4's fourth order"
+            } else {
+                ""
+            };
             format!(
-                " Between 20 and 100 steps the error falls as steps^-{:.1} to steps^-{:.1}: RK4's fourth order.",
+                " Between 20 and 100 steps the error falls as steps^-{:.1} to steps^-{:.1}{fourth}.",
                 s.min, s.max
             )
         })
@@ -199,24 +204,37 @@ fn frames(study: &Study) -> String {
         spread(paired(study, &lg, &q, 10, error_ratio)),
     );
     let (rm_time, lg_time) = (
-        spread(paired(study, &rm, &q, 0, time_ratio)),
-        spread(paired(study, &lg, &q, 0, time_ratio)),
+        spread(paired(study, &rm, &q, 10, time_ratio)),
+        spread(paired(study, &lg, &q, 10, time_ratio)),
     );
     let most_accurate = [(&rm_error, "rotation matrix"), (&lg_error, "Lie group")]
         .iter()
         .filter(|(e, _)| e.is_some_and(|e| e.median < 1.0))
         .map(|(_, name)| *name)
         .collect::<Vec<_>>();
+    let always = [&rm_error, &lg_error]
+        .iter()
+        .all(|e| e.is_some_and(|e| e.min > 1.0));
     let verdict = if most_accurate.is_empty() {
-        "At equal steps the quaternion is the most accurate of the three".to_string()
+        if always {
+            "At equal steps the quaternion is the most accurate of the three in every pair"
+                .to_string()
+        } else {
+            "At equal steps the quaternion is the most accurate of the three by the median"
+                .to_string()
+        }
     } else {
         format!(
             "At equal steps the {} beats the quaternion's accuracy",
             most_accurate.join(" and the ")
         )
     };
-    // At fourth order, an error `r` times larger takes `r^(1/4)` times the steps to make up.
+    // At fourth order, an error `r` times larger takes `r^(1/4)` times the steps to make up. Time
+    // ratios within 5 % of one are within the host's noise.
     let trade = |name: &str, error: &Option<Spread>, time: &Option<Spread>| match (error, time) {
+        (Some(_), Some(t)) if (t.median - 1.0).abs() <= 0.05 => Some(format!(
+            "the {name} frame is about as fast as the quaternion"
+        )),
         (Some(e), Some(t)) if t.median < 1.0 => Some(format!(
             "the {name} frame saves {:.0} % of the time per solve at equal steps, while matching the \
              quaternion's error would take about {:.2}x the steps (RK4's fourth order: the error \
@@ -249,8 +267,8 @@ fn frames(study: &Study) -> String {
     };
     format!(
         "**Frames (f64, same steps).** Against the quaternion, the rotation-matrix frame's error is \
-         {} and the Lie group's {} (10 steps per section and up, all scenes); their time per solve is \
-         {} and {}. {verdict}{cost}. {failed}",
+         {} and the Lie group's {}; their time per solve is {} and {} (10 steps per section and up, \
+         all scenes). {verdict}{cost}. {failed}",
         show(rm_error),
         show(lg_error),
         show(rm_time),
@@ -261,6 +279,7 @@ fn frames(study: &Study) -> String {
 fn kirchhoff(study: &Study) -> String {
     let k = family(Arithmetic::F64, Frame::Quaternion, Reduction::Kirchhoff3d);
     let mut floors = Vec::new();
+    let mut values = Vec::new();
     for key in keys(study) {
         let best = series(study, key, &k)
             .iter()
@@ -268,23 +287,38 @@ fn kirchhoff(study: &Study) -> String {
             .reduce(f64::min);
         if let Some(e) = best {
             floors.push(format!("{} um on {key}", sig(e * 1e6)));
+            values.push(e);
         }
     }
+    let worst = values.iter().copied().fold(0.0, f64::max);
+    let best = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let enough = if worst <= MAIN_TOLERANCE_M && best > 1e-6 {
+        ", enough for a 10 um tolerance and not for 1 um"
+    } else {
+        ""
+    };
     let time = Spread::of(&paired(study, &k, &Family::REFERENCE, 0, time_ratio))
         .map_or("n/a".into(), |s| s.ratio());
     format!(
-        "**Kirchhoff** (inextensible, unshearable) stops improving at {}: its modelling error, enough \
-         for a 10 um tolerance and not for 1 um. Its time per solve is {time} the Cosserat model's.",
+        "**Kirchhoff** (inextensible, unshearable) stops improving at {}: its modelling \
+         error{enough}. Its time per solve is {time} the Cosserat model's.",
         join(&floors)
     )
 }
 
-/// The median sweeps per cold solve of a family, over its scenes and step counts.
-fn median_sweeps(study: &Study, family: &Family) -> Option<f64> {
+/// The median sweeps per cold solve of a family, over the scenes where `like` was measured too (all
+/// of the family's scenes when `like` is the family itself) and their step counts.
+fn median_sweeps(study: &Study, family: &Family, like: &Family) -> Option<f64> {
     let sweeps: Vec<f64> = study
         .rows
         .iter()
         .filter(|r| r.family == *family)
+        .filter(|r| {
+            study
+                .rows
+                .iter()
+                .any(|q| q.family == *like && q.scene == r.scene)
+        })
         .map(|r| r.sweeps_per_solve)
         .collect();
     Spread::of(&sweeps).map(|s| s.median)
@@ -295,13 +329,18 @@ fn planar(study: &Study) -> Option<String> {
     let q = Family::REFERENCE;
     let time = Spread::of(&paired(study, &p, &q, 0, time_ratio))?;
     let error = Spread::of(&paired(study, &p, &q, 0, error_ratio))?;
-    let (sp, sq) = (median_sweeps(study, &p)?, median_sweeps(study, &q)?);
+    let (sp, sq) = (median_sweeps(study, &p, &p)?, median_sweeps(study, &q, &p)?);
+    let work = if sp >= sq {
+        "Its deterministic work is no smaller"
+    } else {
+        "Its deterministic work is smaller"
+    };
     Some(format!(
-        "**Planar reduction** (in-plane scenes): at equal steps an error {:.2}x the 3D model's \
-         (median) in {} of its time per cold solve. Its deterministic work is no smaller ({} sweeps \
-         per solve against {}, the last one the 3D stability test): its steps are cheaper, five \
-         states and one tangent against sixteen states and three tangents.",
-        error.median,
+        "**Planar reduction** (in-plane scenes): at equal steps an error {} the 3D model's in {} \
+         of its time per cold solve. {work} ({} sweeps per solve against {} on the same scenes, the \
+         last one the 3D stability test): its steps are cheaper, five states and one tangent against \
+         sixteen states and three tangents.",
+        error.ratio(),
         time.ratio(),
         sig(sp),
         sig(sq)
@@ -320,24 +359,43 @@ fn f32_floor(study: &Study) -> String {
             best.push(format!("{} um on {key}", sig(e * 1e6)));
         }
     }
-    let solve = study.floors.iter().map(|f| f.solve_m).fold(0.0, f64::max);
-    let sweep = study.floors.iter().map(|f| f.sweep_m).fold(0.0, f64::max);
-    let cause = if solve > 3.0 * sweep {
-        "the floor is the f32 solve's stopping tolerance (2.4e-5 of E I / L), not f32 arithmetic"
-    } else {
-        "the floor is f32 arithmetic itself"
-    };
+    // Per scene: the f32 solve against the f64 solve on the same grid, and one f32 sweep at the f64
+    // root (how well f32 represents the right answer). The stopping rule sets the floor where the
+    // solve is much further off than the sweep.
+    let causes: Vec<String> = keys(study)
+        .into_iter()
+        .filter_map(|key| {
+            let of = |f: fn(&super::measure::F32Floor) -> f64| {
+                study
+                    .floors
+                    .iter()
+                    .filter(|x| x.scene == key)
+                    .map(f)
+                    .reduce(f64::max)
+            };
+            let (solve, sweep) = (of(|x| x.solve_m)?, of(|x| x.sweep_m)?);
+            let cause = if solve > 3.0 * sweep {
+                "the f32 solve's stopping tolerance (2.4e-5 of E I / L), not f32 arithmetic"
+            } else {
+                "f32 arithmetic as much as the stopping rule"
+            };
+            Some(format!(
+                "on {key} the f32 solve's tip lies up to {} um from f64's on the same grid and one \
+                 f32 sweep at the f64 answer's base strain up to {} um: {cause}",
+                sig(solve * 1e6),
+                sig(sweep * 1e6)
+            ))
+        })
+        .collect();
     let time = Spread::of(&paired(study, &q32, &Family::REFERENCE, 0, time_ratio))
         .map_or("n/a".into(), |s| s.ratio());
-    let sweeps = |f: &Family| median_sweeps(study, f).unwrap_or(f64::NAN);
+    let sweeps = |f: &Family| median_sweeps(study, f, f).unwrap_or(f64::NAN);
     format!(
-        "**f32 (libm)** bottoms out at {} (best over the step counts). On the same grid the f32 \
-         solve's tip lies up to {} um from f64's, while one f32 sweep at the f64 answer's base strain \
-         is within {} um: {cause}. On the host f32 takes {time} f64's time, mostly from fewer sweeps \
-         ({} per solve against {}).",
+        "**f32 (libm)** bottoms out at {} (best over the step counts). What sets the floor: {}. On \
+         the host f32 takes {time} f64's time per cold solve, with fewer sweeps ({} per solve \
+         against {}) and a plain sweep hardly cheaper (`report/host_timings.md`).",
         join(&best),
-        sig(solve * 1e6),
-        sig(sweep * 1e6),
+        causes.join("; "),
         sig(sweeps(&q32)),
         sig(sweeps(&Family::REFERENCE))
     )
@@ -379,20 +437,6 @@ fn micromath(study: &Study) -> String {
         |a, b| Some(a.tip_error_m? / b.tip_error_m?),
     ))
     .map_or("n/a".into(), |s| s.ratio());
-    let planar = |a| family(a, Frame::Quaternion, Reduction::Planar);
-    let same = paired(
-        study,
-        &planar(Arithmetic::F32Micromath),
-        &planar(Arithmetic::F32),
-        0,
-        |a, b| Some(f64::from(u8::from(a.error_m()? == b.error_m()?))),
-    );
-    let planar_same = if !same.is_empty() && same.iter().all(|x| *x == 1.0) {
-        " The planar reduction never calls the approximated functions: its micromath rows have \
-         exactly the libm rows' errors."
-    } else {
-        ""
-    };
     let lie: Vec<&&Row> = mm
         .iter()
         .filter(|r| r.family.frame == Frame::LieGroup)
@@ -424,11 +468,11 @@ fn micromath(study: &Study) -> String {
     let time = Spread::of(&time).map_or("n/a".into(), |s| s.ratio());
     format!(
         "**micromath** (model-core's `fast-math`, f32): from {MICROMATH_MIN_STEPS} steps per section \
-         on, cable lengths are off by up to {} mm in the 3D families (its square root, 2.5-6 % off, \
+         on, cable lengths are off by up to {} mm in the 3D families (its square root, up to about 6 % off and exact only at powers of 4, \
          sums the chords between guides), against {} um with libm, while the solves report \
-         `Converged`.{planar_same} Tips with the quaternion frame are {tip} libm's (the frame's \
+         `Converged`. Tips with the quaternion frame are {tip} libm's (the frame's \
          normalisation sits near 1, where the approximation is good). The Lie-group frame breaks: \
-         {drift} of {} solves end in FrameDrift, and those that pass the drift test are up to {} mm \
+         {drift} of its {} rows (scene and step count) end in FrameDrift, and those that pass the drift test are up to {} mm \
          off at the tip. The 3D families' time per solve is {time} libm's, timed in a separate run of \
          a separate build (so the ratio also carries the machine's drift between runs): whatever it \
          saves, the cable lengths are unusable.",
@@ -471,8 +515,9 @@ fn mcu(study: &Study) -> Option<String> {
         .map_or("none of the step counts".into(), |r| {
             format!("{} steps per section", r.qemu.steps_per_section)
         });
-    // The one-sweep update against the converged f64 answer: its lag behind the same f32 model's
-    // forward solve plus that model's error (the triangle inequality: a bound, not a measurement).
+    // The one-sweep update against the converged f64 answer: its worst lag behind the same f32
+    // model's forward solve along the bench's path plus that model's error at the path's first force
+    // (an estimate: the model's error is measured at one force of the path only).
     let updates: Vec<String> = m
         .rows
         .iter()
@@ -481,28 +526,34 @@ fn mcu(study: &Study) -> Option<String> {
             let bound = r.qemu.update_one_sweep_lag_m? + r.host_f32.error_m()?;
             let meets = n <= UPDATE_TARGET_INSTRUCTIONS && bound <= UPDATE_TARGET_TIP_M;
             Some(format!(
-                "{} steps: {n} instructions, tip within {} um{}",
+                "{} steps: {n} instructions, tip within about {} um{}",
                 r.qemu.steps_per_section,
                 sig(bound * 1e6),
                 if meets { " (meets both)" } else { "" }
             ))
         })
         .collect();
-    let warm = m
+    let warm: Vec<String> = m
         .rows
         .iter()
-        .filter_map(|r| r.qemu.update_warm_instructions)
-        .min()
-        .map_or("n/a".into(), |n| n.to_string());
+        .filter_map(|r| {
+            Some(format!(
+                "{} at {} steps",
+                r.qemu.update_warm_instructions?, r.qemu.steps_per_section
+            ))
+        })
+        .collect();
+    let warm = join(&warm);
     Some(format!(
         "**Cortex-M4F** (QEMU instruction counts; errors computed on the host in f32): a plain sweep \
          costs {:.0} instructions per RK4 step. A cold f32 solve of the golden bench at {}; at {}. \
          The f32 error is f32's floor (the f64 model's is under a quarter of it) from {floor_from}. \
          The target of a warm 3D update within {UPDATE_TARGET_INSTRUCTIONS} instructions with the tip \
-         within {} mm of the converged f64 answer: the update that converges every tick costs at least \
-         {warm} instructions; the one-sweep update (one sweep with six tangents and one Newton step \
-         per tick), bounded by its lag behind the same model's forward solve plus that model's error: \
-         {}.",
+         within {} mm of the converged f64 answer: the update that converges every tick takes, on its \
+         costliest tick of the bench's path, {warm} (instructions); the one-sweep update (one sweep with \
+         six tangents and one Newton step per tick), with its tip estimated as its worst lag behind \
+         the same model's forward solve on the path plus that model's error at the path's first \
+         force: {}.",
         m.instructions_per_step,
         describe(firmware),
         describe(fewest),
@@ -539,32 +590,68 @@ fn reductions(study: &Study) -> String {
         }
     }
     let speedup = Spread::of(&speedups).map_or("n/a".into(), |s| s.ratio());
+    let slower = speedups.iter().filter(|x| **x < 1.0).count();
+    let slower = if slower == 0 {
+        String::new()
+    } else {
+        format!(
+            " ({slower} of {} picks slower on the host than the full model, which `choose`'s \
+             machine-independent cost model does not see)",
+            speedups.len()
+        )
+    };
+    let shape = study.reductions.iter().filter(|r| r.shape_within()).count();
+    let off_shape: Vec<String> = study
+        .reductions
+        .iter()
+        .filter(|r| r.meets() && !r.shape_within())
+        .map(|r| {
+            format!(
+                "{} at {} steps for {:.0e} m on {} ({} um)",
+                r.picked.label(),
+                r.picked_steps,
+                r.tolerance_m,
+                r.scene,
+                sig(r.picked_shape_error_m.unwrap_or(f64::NAN) * 1e6)
+            )
+        })
+        .collect();
+    let shape = if off_shape.is_empty() {
+        format!(" On the whole backbone (the study's error) {shape} of {total} are within it too.")
+    } else {
+        format!(
+            " `choose` promises tip and cable lengths only: on the whole backbone {shape} of {total} \
+             are within the tolerance; not {}.",
+            join(&off_shape)
+        )
+    };
+    let mut far = true;
     let bookkeeping: Vec<String> = study
         .reductions
         .iter()
         .filter_map(|r| {
             let b = r.bookkeeping.as_ref()?;
-            Some(format!(
-                "{} um on {}",
-                sig(b.average.error_m()? * 1e6),
-                r.scene
-            ))
+            let e = b.average.error_m()?;
+            far &= e > 10.0 * MAIN_TOLERANCE_M;
+            Some(format!("{} um on {}", sig(e * 1e6), r.scene))
         })
         .collect();
+    let far = if far { ", far beyond 10 um" } else { "" };
     let bookkeeping = if bookkeeping.is_empty() {
         String::new()
     } else {
         format!(
             " Skipping the guides' mass bookkeeping under gravity (average instead of accurate guide \
-             mass) is a different model, not a cheaper discretisation: {} off, far beyond 10 um; \
-             without gravity the plan drops it by itself, at no error.",
+             mass) is a different model, not a cheaper discretisation: {} off{far}; without \
+             gravity the plan drops it by itself, at no error.",
             join(&bookkeeping)
         )
     };
     format!(
-        "**Reductions.** `reduction::choose`'s pick meets its tolerance against this study's \
-         reference in {met} of {total} cases. For 10 um it picks {}; measured on the host, {speedup} \
-         faster than the full 3D model at its own fewest steps for the tolerance.{bookkeeping}",
+        "**Reductions.** `reduction::choose`'s pick meets its tolerance on tip and cable lengths \
+         against this study's reference in {met} of {total} cases.{shape} For 10 um it picks {}; \
+         measured on the host, {speedup} faster than the full 3D model at its own fewest steps for \
+         the tolerance{slower}.{bookkeeping}",
         join(&picks)
     )
 }

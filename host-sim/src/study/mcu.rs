@@ -125,8 +125,14 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
             _ => {}
         }
     }
-    if out.is_empty() || out.iter().any(|c| c.cold_instructions == 0) {
-        return Err(bench_error("no forward_cold lines"));
+    if out.is_empty()
+        || out
+            .iter()
+            .any(|c| c.cold_instructions == 0 || c.sweep_instructions == 0)
+    {
+        return Err(bench_error(
+            "a step count without its sweep or forward_cold line",
+        ));
     }
     Ok(out)
 }

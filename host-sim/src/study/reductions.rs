@@ -73,6 +73,9 @@ pub struct ReductionCase {
     pub full_cost: u32,
     /// The pick's error against the study's reference (tip and cables, as `choose` measures), m.
     pub picked_study_error_m: Option<f64>,
+    /// The pick's error with the backbone points too (the study's error), m: `choose` promises
+    /// only tip and cables.
+    pub picked_shape_error_m: Option<f64>,
     /// Every reduction's best candidate (at the main tolerance only; empty otherwise).
     pub candidates: Vec<Candidate>,
     /// The mass-bookkeeping comparison (accurate-mass scenes at the main tolerance).
@@ -80,9 +83,16 @@ pub struct ReductionCase {
 }
 
 impl ReductionCase {
-    /// Whether the pick meets the tolerance against the study's reference too.
+    /// Whether the pick meets the tolerance against the study's reference too, on tip and cables
+    /// (what `choose` promises).
     pub fn meets(&self) -> bool {
         self.picked_study_error_m
+            .is_some_and(|e| e.is_finite() && e <= self.tolerance_m)
+    }
+
+    /// Whether the pick is within the tolerance on the whole backbone too.
+    pub fn shape_within(&self) -> bool {
+        self.picked_shape_error_m
             .is_some_and(|e| e.is_finite() && e <= self.tolerance_m)
     }
 
@@ -193,6 +203,7 @@ pub fn study(
                 cost: choice.cost,
                 full_cost: choice.full_cost,
                 picked_study_error_m: tip_and_cables(&picked_row),
+                picked_shape_error_m: picked_row.error_m(),
                 candidates,
                 bookkeeping: None,
             };
