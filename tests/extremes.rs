@@ -20,7 +20,7 @@ use model_core::{
     Attitude, Equilibrium, GuideMass, Model, ModelError, Rod, Scalar, Section, ShapePoint,
     ShootingSettings, Stability, Start, TipLoad,
 };
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
@@ -186,18 +186,6 @@ fn loading_path(rod: &Rod<f64>, load: &TipLoad<f64>, n: usize) -> Option<Equilib
     last
 }
 
-fn blank_points(n: usize) -> Vec<ShapePoint<f64>> {
-    vec![
-        ShapePoint {
-            s_m: 0.0,
-            position_m: Vector3::zeros(),
-            rotation: Matrix3::identity(),
-            strain_per_m: Vector3::zeros(),
-        };
-        n
-    ]
-}
-
 /// The contract of a cold solve under a tip force of `kg` times g along `direction(polar, azimuth)`
 /// on the thesis bench (100 steps): verified or refused; a success equals the loading path's answer.
 fn tip_force_contract(kg: f64, polar: f64, azimuth: f64) -> Result<(), TestCaseError> {
@@ -294,7 +282,7 @@ proptest! {
         let model = Model::<f64>::new(bare_rod(L, e_pa, 200, false)).expect("model");
         let eq = cold(&model, &TipLoad::moment(m));
         prop_assert_eq!(verify(&model, &eq), Ok(true), "{:?}", eq.report);
-        let mut out = blank_points(s.len());
+        let mut out = vec![ShapePoint::default(); s.len()];
         model.shape(&eq, &s, &mut out).expect("valid queries");
         let worst = out.iter().map(|p| (p.position_m - helix(p.s_m)).norm()).fold(0.0, f64::max);
         prop_assert!(worst < 1e-6, "f64: {} m off the helix", worst);
@@ -303,7 +291,7 @@ proptest! {
         let eq = cold(&m32, &TipLoad::moment(lit(&m)));
         prop_assert_eq!(verify(&m32, &eq), Ok(true), "{:?}", eq.report);
         let s32: Vec<f32> = s.iter().map(|x| *x as f32).collect();
-        let mut out = vec![ShapePoint { s_m: 0.0f32, position_m: Vector3::zeros(), rotation: Matrix3::identity(), strain_per_m: Vector3::zeros() }; s.len()];
+        let mut out = vec![ShapePoint::default(); s.len()];
         m32.shape(&eq, &s32, &mut out).expect("valid queries");
         let worst = out.iter().map(|p| (f64s(&p.position_m) - helix(f64::from(p.s_m))).norm()).fold(0.0, f64::max);
         prop_assert!(worst < 2e-5, "f32: {} m off the helix", worst);

@@ -25,7 +25,7 @@ use model_core::{
     PointLoad, Quaternion, Rod, RotationMatrix, Scalar, Section, ShapePoint, ShootingSettings,
     Stability, Start, Stiffness, Termination, TipLoad,
 };
-use nalgebra::{Matrix3, Vector1, Vector3};
+use nalgebra::{Vector1, Vector3};
 
 // ------------------------------------------------------------------------------------------------
 // Scenes and helpers
@@ -195,7 +195,7 @@ fn in_plane_unstable_modes<T: Scalar, A: Attitude<T>>(
     let rho = section.line_density_kg_per_m.to_f64();
     let (f, g) = (f64s(&eq.load.force_n), f64s(&rod.gravity_m_s2));
     let s: Vec<T> = (0..N).map(|i| T::lit((i as f64 + 0.5) * h)).collect();
-    let mut shape = blank_points(N);
+    let mut shape = vec![ShapePoint::default(); N];
     model.shape(eq, &s, &mut shape).ok()?;
     let mut theta: Vec<f64> = shape
         .iter()
@@ -432,18 +432,6 @@ fn ramp<T: Scalar, A: Attitude<T>>(
     tips
 }
 
-fn blank_points<T: Scalar>(n: usize) -> Vec<ShapePoint<T>> {
-    vec![
-        ShapePoint {
-            s_m: T::zero(),
-            position_m: Vector3::zeros(),
-            rotation: Matrix3::identity(),
-            strain_per_m: Vector3::zeros(),
-        };
-        n
-    ]
-}
-
 /// The backbone under a pure tip moment `m` (N m, global) and nothing else: `n = 0`, so the moment is
 /// the same everywhere, `v = e3`, and the tangent turns about `m` at the rate `|m| / E I` (for an
 /// isotropic section, whatever the torsion). The rod is a helix with its axis along `m` (a circle
@@ -475,7 +463,7 @@ fn pure_moment_error<T: Scalar, A: Attitude<T>>(m: Vector3<f64>, steps: u16) -> 
     let ei = bending_stiffness(&model);
     let t0 = f64s(&model.rod().base_orientation.column(2).into_owned());
     let s: Vec<T> = (0..9).map(|i| T::lit(L * i as f64 / 8.0)).collect();
-    let mut out = blank_points(s.len());
+    let mut out = vec![ShapePoint::default(); s.len()];
     let written = model.shape(&eq, &s, &mut out).expect("valid queries");
     assert_eq!(written, s.len());
     let mut worst = 0.0f64;
@@ -1150,7 +1138,7 @@ fn non_finite_solve_inputs_are_refused_by_name() {
             Some(ModelError::NonFinite("tip force"))
         );
         let eq = cold(&model, &weight(0.04));
-        let mut out = blank_points(2);
+        let mut out = vec![ShapePoint::default(); 2];
         assert_eq!(
             model.shape(&eq, &[0.1, x], &mut out).err(),
             Some(ModelError::NonFinite("shape arc length"))

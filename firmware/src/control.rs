@@ -8,7 +8,7 @@
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
 use model_core::{ModelError, Quaternion, ShapePoint, Termination};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use crate::config::{BenchModel, MODEL_NODES};
 use crate::encoder::CableLengthSource;
@@ -222,12 +222,7 @@ impl<'m> EstimatorLoop<'m> {
         cold: bool,
         converged: bool,
     ) -> Result<TickRecord, ModelError> {
-        let blank = ShapePoint {
-            s_m: 0.0,
-            position_m: Vector3::zeros(),
-            rotation: Matrix3::identity(),
-            strain_per_m: Vector3::zeros(),
-        };
+        let blank = ShapePoint::default();
         let mut points = [blank; SHAPE_POINTS];
         self.model.shape_at(
             &estimate.base_strain_per_m,

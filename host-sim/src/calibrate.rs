@@ -8,7 +8,7 @@
 
 use model_core::reference::{self, csv_rows};
 use model_core::{Model, PointLoad, Rod, ShapePoint, Start, TipLoad};
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::scene::{Scene, SceneError};
 use crate::scenes;
@@ -149,12 +149,7 @@ impl Problem {
                     format!("did not converge ({:?})", eq.report.termination),
                 ));
             }
-            let blank = ShapePoint {
-                s_m: 0.0,
-                position_m: Vector3::zeros(),
-                rotation: Matrix3::identity(),
-                strain_per_m: Vector3::zeros(),
-            };
+            let blank = ShapePoint::default();
             let mut points = vec![blank; row.s_m.len()];
             model
                 .shape(&eq, &row.s_m, &mut points)

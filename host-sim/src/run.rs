@@ -5,7 +5,7 @@ use model_core::inverse::{EstimatorSettings, InverseSettings, InverseStart, Load
 use model_core::{
     Attitude, LieGroup, Model, Quaternion, RotationMatrix, ShapePoint, Start, TipLoad,
 };
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use serde::Serialize;
 
 use crate::scene::{AttitudeChoice, Scene, SceneError};
@@ -110,15 +110,6 @@ fn point(p: &ShapePoint<f64>) -> Point {
     }
 }
 
-fn blank() -> ShapePoint<f64> {
-    ShapePoint {
-        s_m: 0.0,
-        position_m: Vector3::zeros(),
-        rotation: Matrix3::identity(),
-        strain_per_m: Vector3::zeros(),
-    }
-}
-
 /// `solve`: the scene under its tip load (or `load`).
 #[derive(Debug)]
 pub struct Solve<'a> {
@@ -136,7 +127,7 @@ impl WithModel for Solve<'_> {
             .solve(&self.load, Start::Cold, &settings)
             .map_err(|e| SceneError::new("tip", e.to_string()))?;
         let s = self.scene.output_points_m(model.length_m())?;
-        let mut points = vec![blank(); s.len()];
+        let mut points = vec![ShapePoint::default(); s.len()];
         model
             .shape(&eq, &s, &mut points)
             .map_err(|e| SceneError::new("output", e.to_string()))?;
@@ -237,7 +228,7 @@ impl WithModel for Estimate<'_> {
         )
         .map_err(|e| SceneError::new("--cables", e.to_string()))?;
         let s = self.scene.output_points_m(model.length_m())?;
-        let mut points = vec![blank(); s.len()];
+        let mut points = vec![ShapePoint::default(); s.len()];
         model
             .shape_at(&est.base_strain_per_m, &est.load, &s, &mut points)
             .map_err(|e| SceneError::new("output", e.to_string()))?;

@@ -5,7 +5,7 @@
 
 use model_core::reference::{self, csv_rows};
 use model_core::{Model, PointLoad, ShapePoint, Stability, Start, TipLoad};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use crate::scene::{Scene, SceneError};
 use crate::scenes;
@@ -293,15 +293,6 @@ impl Validation {
     }
 }
 
-fn blank_point() -> ShapePoint<f64> {
-    ShapePoint {
-        s_m: 0.0,
-        position_m: Vector3::zeros(),
-        rotation: Matrix3::identity(),
-        strain_per_m: Vector3::zeros(),
-    }
-}
-
 /// Solves a scene's rod under a tip weight and returns the shape at `s_m`, the cable lengths and the report.
 pub(crate) struct Solved {
     pub points: Vec<ShapePoint<f64>>,
@@ -320,7 +311,7 @@ pub(crate) fn solve_rows(
     let eq = model
         .solve(load, Start::Cold, &settings)
         .map_err(|e| SceneError::new("tip", e.to_string()))?;
-    let mut points = vec![blank_point(); s_m.len()];
+    let mut points = vec![ShapePoint::default(); s_m.len()];
     model
         .shape(&eq, s_m, &mut points)
         .map_err(|e| SceneError::new("output", e.to_string()))?;

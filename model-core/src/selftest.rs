@@ -187,12 +187,7 @@ pub fn pure_moment_circle<T: Scalar>() -> Outcome {
     let eq = solved(&model, &TipLoad::moment(lit3([0.0, 0.0, moment])))?;
     let radius = ei / moment;
     let s: [T; 5] = core::array::from_fn(|i| T::lit(L * i as f64 / 4.0));
-    let blank = ShapePoint {
-        s_m: T::zero(),
-        position_m: Vector3::zeros(),
-        rotation: nalgebra::Matrix3::identity(),
-        strain_per_m: Vector3::zeros(),
-    };
+    let blank = ShapePoint::default();
     let mut out = [blank; 5];
     let written = ok("shape", model.shape(&eq, &s, &mut out))?;
     holds("all shape points written", written == s.len())?;
@@ -303,12 +298,7 @@ pub fn table_4_1<T: Scalar>() -> Outcome {
         )?;
         let model = ok("model", Model::new(rod))?;
         let eq = solved(&model, &TipLoad::zero())?;
-        let blank = ShapePoint {
-            s_m: T::zero(),
-            position_m: Vector3::zeros(),
-            rotation: nalgebra::Matrix3::identity(),
-            strain_per_m: Vector3::zeros(),
-        };
+        let blank = ShapePoint::default();
         let mut out = [blank; 2];
         let s = [T::lit(reference::EXP1_TRANSITION_M), T::lit(L)];
         ok("shape", model.shape(&eq, &s, &mut out))?;
@@ -886,12 +876,7 @@ where
         "negative diameter",
         CrossSection::solid_circle(T::lit(-1.0)).is_err(),
     )?;
-    let blank = ShapePoint {
-        s_m: T::zero(),
-        position_m: Vector3::zeros(),
-        rotation: nalgebra::Matrix3::identity(),
-        strain_per_m: Vector3::zeros(),
-    };
+    let blank = ShapePoint::default();
     let mut out = [blank; 2];
     let eq = solved(&model, &TipLoad::zero())?;
     holds(

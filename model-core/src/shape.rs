@@ -15,6 +15,19 @@ pub struct ShapePoint<T> {
     pub strain_per_m: Vector3<T>,
 }
 
+/// The rod's base at rest (arc length zero, at the origin, identity frame, no strain): what an
+/// output buffer is filled with before a shape is written into it.
+impl<T: nalgebra::RealField + Copy> Default for ShapePoint<T> {
+    fn default() -> Self {
+        Self {
+            s_m: T::zero(),
+            position_m: Vector3::zeros(),
+            rotation: Matrix3::identity(),
+            strain_per_m: Vector3::zeros(),
+        }
+    }
+}
+
 impl<T: nalgebra::RealField + Copy> ShapePoint<T> {
     /// The unit tangent (local z) in global coordinates.
     pub fn tangent(&self) -> Vector3<T> {

@@ -125,15 +125,7 @@ fn pure_moment_is_a_circle<T: Scalar>(tol_m: f64) {
     let s: Vec<T> = (0..=10)
         .map(|i| T::lit(LENGTH_M * i as f64 / 10.0))
         .collect();
-    let mut out = vec![
-        ShapePoint {
-            s_m: T::zero(),
-            position_m: Vector3::zeros(),
-            rotation: nalgebra::Matrix3::identity(),
-            strain_per_m: Vector3::zeros()
-        };
-        s.len()
-    ];
+    let mut out = vec![ShapePoint::default(); s.len()];
     assert_eq!(model.shape(&eq, &s, &mut out).unwrap(), s.len());
     for p in &out {
         let phi = p.s_m.to_f64() / radius;

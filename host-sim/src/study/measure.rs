@@ -10,7 +10,7 @@ use model_core::{
     Attitude, Equilibrium, LieGroup, Model, ModelError, Quaternion, RotationMatrix, Scalar,
     ShapePoint, ShootingSettings, Start, TipLoad,
 };
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::cases::Scene;
@@ -152,15 +152,6 @@ pub fn arc_lengths_m<T: Scalar>(length_m: T) -> Vec<T> {
         .collect()
 }
 
-fn blank<T: Scalar>() -> ShapePoint<T> {
-    ShapePoint {
-        s_m: T::zero(),
-        position_m: Vector3::zeros(),
-        rotation: Matrix3::identity(),
-        strain_per_m: Vector3::zeros(),
-    }
-}
-
 fn to_f64<T: Scalar>(v: &Vector3<T>) -> Vector3<f64> {
     v.map(Scalar::to_f64)
 }
@@ -211,7 +202,7 @@ impl<'a, T: Scalar, A: Attitude<T>> Solver<'a, T, A> {
 
     fn shape(&self, case: usize, eq: &Equilibrium<T>) -> Result<Vec<Vector3<f64>>, SceneError> {
         let s = arc_lengths_m(self.model.length_m());
-        let mut out = vec![blank(); s.len()];
+        let mut out = vec![ShapePoint::default(); s.len()];
         let written = match self.planar.as_ref().and_then(|p| p.get(case)) {
             Some(planar) => planar.shape(eq, &s, &mut out),
             None => self.model.shape(eq, &s, &mut out),
