@@ -72,6 +72,24 @@ fn plot_error(e: impl std::fmt::Display) -> SceneError {
     SceneError::new("plots", e.to_string())
 }
 
+/// The series' labels in a framed box at `position`.
+fn series_labels<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), SceneError>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 13))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(position)
+        .draw()
+        .map_err(plot_error)
+}
+
 /// Mass -> a colour along a fixed palette.
 fn colour(i: usize) -> RGBColor {
     const PALETTE: [RGBColor; 8] = [
@@ -149,14 +167,7 @@ where
         .map_err(plot_error)?
         .label("observed tip (filled); thesis prediction (cross)")
         .legend(|(x, y)| Circle::new((x + 9, y), 5, BLACK.filled()));
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerLeft)
-        .draw()
-        .map_err(plot_error)?;
+    series_labels(&mut chart, SeriesLabelPosition::LowerLeft)?;
     root.present().map_err(plot_error)
 }
 
@@ -259,14 +270,7 @@ where
         .map_err(plot_error)?
         .label("observed (ruler, +-0.5 mm)")
         .legend(|(x, y)| Circle::new((x + 9, y), 5, BLACK.filled()));
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(plot_error)?;
+    series_labels(&mut chart, SeriesLabelPosition::LowerRight)?;
     root.present().map_err(plot_error)
 }
 

@@ -279,24 +279,30 @@ pub fn table_4_5_accurate<T: Scalar>() -> Outcome {
     table_4_5::<T>(Exp2Mass::Accurate, 6)
 }
 
+/// The bench of Table 4.1 with `mass_g` hung at the section transition (at the modulus the thesis's
+/// predictions imply), 50 steps per section.
+fn table_4_1_model<T: Scalar>(mass_g: f64) -> Result<Model<T>, Failure> {
+    let mut rod = ok(
+        "bench",
+        reference::exp1_bench::<T>(reference::EXP1_YOUNGS_MODULUS_PA, 50),
+    )?;
+    ok(
+        "load",
+        rod.push_load(PointLoad::mass(
+            T::lit(reference::EXP1_TRANSITION_M),
+            T::lit(mass_g * 1e-3),
+        )),
+    )?;
+    ok("model", Model::new(rod))
+}
+
 /// Thesis Table 4.1: the predicted tips of both sections, within 0.1 cm (at the modulus that the
 /// thesis's predictions imply, see [`reference::EXP1_YOUNGS_MODULUS_PA`]).
 pub fn table_4_1<T: Scalar>() -> Outcome {
     let mut worst = 0.0f64;
     for row in reference::csv_rows::<9>(reference::TABLE_4_1_CSV) {
         let row = ok("Table 4.1 row", row)?;
-        let mut rod = ok(
-            "bench",
-            reference::exp1_bench::<T>(reference::EXP1_YOUNGS_MODULUS_PA, 50),
-        )?;
-        ok(
-            "load",
-            rod.push_load(PointLoad::mass(
-                T::lit(reference::EXP1_TRANSITION_M),
-                T::lit(row[0] * 1e-3),
-            )),
-        )?;
-        let model = ok("model", Model::new(rod))?;
+        let model = table_4_1_model::<T>(row[0])?;
         let eq = solved(&model, &TipLoad::zero())?;
         let blank = ShapePoint::default();
         let mut out = [blank; 2];
@@ -318,18 +324,7 @@ pub fn table_4_1<T: Scalar>() -> Outcome {
 pub fn thesis_rows_converge_cold<T: Scalar>() -> Outcome {
     for row in reference::csv_rows::<9>(reference::TABLE_4_1_CSV) {
         let row = ok("Table 4.1 row", row)?;
-        let mut rod = ok(
-            "bench",
-            reference::exp1_bench::<T>(reference::EXP1_YOUNGS_MODULUS_PA, 50),
-        )?;
-        ok(
-            "load",
-            rod.push_load(PointLoad::mass(
-                T::lit(reference::EXP1_TRANSITION_M),
-                T::lit(row[0] * 1e-3),
-            )),
-        )?;
-        let eq = solved(&ok("model", Model::new(rod))?, &TipLoad::zero())?;
+        let eq = solved(&table_4_1_model::<T>(row[0])?, &TipLoad::zero())?;
         holds(
             "Table 4.1 row stable",
             eq.report.stability == Stability::Stable,
