@@ -12,10 +12,10 @@
 
 use std::f64::consts::{PI, TAU};
 
+use model_checks::reference::{self, Exp2Mass};
 use model_core::inverse::{
     Determination, InverseSettings, InverseStart, LoadBasis, cable_length_bound_m, estimate,
 };
-use model_core::reference::{self, Exp2Mass};
 use model_core::{
     Attitude, Equilibrium, GuideMass, Model, ModelError, Rod, Scalar, Section, ShapePoint,
     ShootingSettings, Stability, Start, TipLoad,

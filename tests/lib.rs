@@ -1,6 +1,6 @@
 //! Shared helpers for the cross-crate tests in this directory. The reference data they read live in
 //! `data/` (the thesis's tables and the independent golden reference), committed once and embedded by
-//! `model_core::reference`.
+//! `model_checks::reference`.
 
 use model_core::{Model, Scalar, ShootingSettings, Start, TipLoad};
 use nalgebra::Vector3;
@@ -18,7 +18,7 @@ pub fn tip<T: Scalar>(model: &Model<T>, load: &TipLoad<T>) -> Vector3<f64> {
 pub fn weight<T: Scalar>(grams: f64) -> TipLoad<T> {
     TipLoad::force(Vector3::new(
         T::zero(),
-        T::lit(-grams * 1e-3 * model_core::reference::GRAVITY_M_S2),
+        T::lit(-grams * 1e-3 * model_checks::reference::GRAVITY_M_S2),
         T::zero(),
     ))
 }

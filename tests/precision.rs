@@ -1,7 +1,7 @@
 //! f32 (the MCU) against f64 (the host) on every thesis scene: the tip within 0.1 mm.
 
 use integration_tests::{tip, weight};
-use model_core::reference::{self, Exp2Mass, csv_rows};
+use model_checks::reference::{self, Exp2Mass, csv_rows};
 use model_core::{Model, PointLoad, Scalar, TipLoad};
 
 const TOL_M: f64 = 1e-4;

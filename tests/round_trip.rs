@@ -7,8 +7,8 @@
 //! nonlinearly), the estimate may fail to converge, but whenever it reports success its error must lie
 //! within the uncertainty it reports: never a confident wrong number.
 
+use model_checks::reference;
 use model_core::inverse::{Estimate, InverseSettings, InverseStart, LoadBasis, estimate};
-use model_core::reference;
 use model_core::{Equilibrium, Model, ShootingSettings, Start, TipLoad};
 use nalgebra::Vector3;
 use proptest::prelude::*;

@@ -3,7 +3,7 @@
 
 use host_sim::scenes;
 use integration_tests::{tip, weight};
-use model_core::reference::{self, Exp2Mass};
+use model_checks::reference::{self, Exp2Mass};
 use model_core::{Model, PointLoad, TipLoad};
 use nalgebra::Vector3;
 

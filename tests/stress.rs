@@ -14,12 +14,12 @@
 //! reproduced model-core defects, now fixed, stay as regressions with the defect described. Slow
 //! tables are `#[ignore]`d with a note; every extreme has a fast case.
 
+use model_checks::reference::{self, Exp2Mass};
 use model_core::inverse::{
     Determination, Estimator, EstimatorSettings, InverseSettings, InverseStart, LoadBasis,
     cable_length_bound_m, estimate,
 };
 use model_core::planar::PlanarModel;
-use model_core::reference::{self, Exp2Mass};
 use model_core::{
     Attitude, CrossSection, Equilibrium, GuideMass, LieGroup, Material, Model, ModelError,
     PointLoad, Quaternion, Rod, RotationMatrix, Scalar, Section, ShapePoint, ShootingSettings,

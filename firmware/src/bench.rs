@@ -13,8 +13,8 @@
 //! * `update_one_sweep`: the same with a budget of one sweep (model-core's hard real-time mode: one
 //!   six-tangent sweep and one Newton step per update).
 
+use model_checks::reference::golden_bench;
 use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
-use model_core::reference::golden_bench;
 use model_core::{ModelError, ShootingSettings, Start, Termination, TipLoad};
 use nalgebra::Vector3;
 

@@ -5,7 +5,7 @@
 //!   jump injected on the way (both must be refused and the last estimate kept).
 //! * [`run_golden`]: the golden 3D rows, from their cable lengths alone.
 
-use model_core::reference::golden_rows;
+use model_checks::reference::golden_rows;
 use model_core::{ModelError, Termination};
 
 use crate::config::{BenchModel, MAX_UNWRAP_STEP_COUNTS, loop_config, spools};

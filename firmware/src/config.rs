@@ -1,8 +1,8 @@
 //! What the firmware runs: the golden three-cable bench (39 cm Nitinol rod, five guides, cables at
 //! 0/120/240 degrees) at [`STEPS_PER_SECTION`], three AS5047P spools, a 100 Hz loop.
 
+use model_checks::reference::{FREE_LENGTH_M, golden_bench};
 use model_core::inverse::{EstimatorSettings, InverseSettings};
-use model_core::reference::{FREE_LENGTH_M, golden_bench};
 use model_core::{Model, ModelError, Quaternion, Scalar};
 
 use crate::control::{LoopConfig, SHAPE_POINTS};

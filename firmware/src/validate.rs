@@ -168,7 +168,7 @@ impl ReadingValidator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use model_core::reference::golden_bench;
+    use model_checks::reference::golden_bench;
 
     fn validator() -> Result<ReadingValidator, ModelError> {
         let model = BenchModel::new(golden_bench(10)?)?;
@@ -261,8 +261,8 @@ mod tests {
             ReadingValidator::new(&model, 1e-3, f32::NAN),
             Err(ModelError::NonFinite("cable step margin"))
         );
-        let two_cables = BenchModel::new(model_core::reference::exp2_bench(
-            model_core::reference::Exp2Mass::Average,
+        let two_cables = BenchModel::new(model_checks::reference::exp2_bench(
+            model_checks::reference::Exp2Mass::Average,
             10,
             2,
         )?)?;

@@ -6,7 +6,7 @@
 //! evaluation solves every row (warm-started along the table). The standard deviation of the fit comes
 //! from the residual variance and the Jacobian at the optimum.
 
-use model_core::reference::{self, csv_rows};
+use model_checks::reference::{self, csv_rows};
 use model_core::{Model, PointLoad, Rod, ShapePoint, Start, TipLoad};
 use nalgebra::{DMatrix, DVector, Vector3};
 

@@ -82,7 +82,7 @@ pub struct Scene {
 }
 
 fn default_gravity() -> [f64; 3] {
-    [0.0, -model_core::reference::GRAVITY_M_S2, 0.0]
+    [0.0, -model_checks::reference::GRAVITY_M_S2, 0.0]
 }
 
 /// The clamp: position and the frame's local x and z (tangent) axes in global coordinates.

@@ -3,7 +3,7 @@
 //!
 //! The tables are in cm and grams; they are converted here, once, and the model works in SI.
 
-use model_core::reference::{self, csv_rows};
+use model_checks::reference::{self, csv_rows};
 use model_core::{Model, PointLoad, ShapePoint, Stability, Start, TipLoad};
 use nalgebra::Vector3;
 

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use model_core::reference::golden_rows;
+use model_checks::reference::golden_rows;
 use serde_json::Value;
 
 fn host_sim(args: &[&str]) -> Output {

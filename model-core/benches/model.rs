@@ -21,11 +21,11 @@ use std::time::Duration;
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
+use model_checks::reference::{self, Exp2Mass};
 use model_core::inverse::{
     Estimator, EstimatorSettings, InverseSettings, InverseStart, LoadBasis, estimate,
 };
 use model_core::planar::PlanarModel;
-use model_core::reference::{self, Exp2Mass};
 use model_core::{
     Attitude, LieGroup, Model, Quaternion, RotationMatrix, Scalar, ShootingSettings, Start, TipLoad,
 };

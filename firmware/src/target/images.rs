@@ -33,7 +33,7 @@ fn micro(x: f64, scale: f64) -> u32 {
 /// model-core's no_std self-checks in f32.
 pub fn selftest() -> bool {
     hprintln!("selftest: model-core self-checks in f32 on the Cortex-M4F");
-    let (passed, failed) = model_core::selftest::run_all::<f32>(|name, outcome| match outcome {
+    let (passed, failed) = model_checks::selftest::run_all::<f32>(|name, outcome| match outcome {
         Ok(()) => hprintln!("ok   {}", name),
         Err(f) => hprintln!(
             "FAIL {}: {} = {:e} (limit {:e})",

@@ -1,8 +1,8 @@
 //! The scenes of the study: the thesis's experiment-2 bench with a hung mass (in-plane, gravity,
 //! accurate guide mass, three cables) and the golden 3D bench under its rows' tip forces.
 
+use model_checks::reference::{self, Exp2Mass};
 use model_core::planar::PlanarModel;
-use model_core::reference::{self, Exp2Mass};
 use model_core::{Model, Rod, Scalar, StrainModel, TipLoad};
 use nalgebra::Vector3;
 

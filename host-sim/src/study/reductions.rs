@@ -3,8 +3,8 @@
 //! study's reference with host wall times, and the one reduction `choose` does not try under gravity
 //! (skipping the guides' mass bookkeeping).
 
+use model_checks::reference::Exp2Mass;
 use model_core::reduction::{Choice, Trial, choose};
-use model_core::reference::Exp2Mass;
 use model_core::{Model, ShootingSettings};
 use nalgebra::Vector3;
 

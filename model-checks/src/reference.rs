@@ -5,9 +5,9 @@
 
 use nalgebra::{Vector2, Vector3};
 
-use crate::error::ModelError;
-use crate::{
-    Cable, CrossSection, Guide, GuideMass, Material, PointLoad, Rod, Scalar, Section, Stiffness,
+use model_core::{
+    Cable, CrossSection, Guide, GuideMass, Material, ModelError, PointLoad, Rod, Scalar, Section,
+    Stiffness,
 };
 
 /// Nitinol rod diameter, m.

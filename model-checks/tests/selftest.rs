@@ -1,6 +1,6 @@
 //! The no_std self-checks (also run on the emulated MCU by the firmware), here on the host in f64 and f32.
 
-use model_core::selftest::run_all;
+use model_checks::selftest::run_all;
 
 fn run<T: model_core::Scalar>(label: &str)
 where

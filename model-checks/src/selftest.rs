@@ -11,12 +11,12 @@
 
 use nalgebra::{Vector1, Vector2, Vector3};
 
-use crate::inverse::{
+use crate::reference::{self, Exp2Mass};
+use model_core::inverse::{
     Determination, Estimator, EstimatorSettings, InverseSettings, InverseStart, LoadBasis,
     ParamCount, Params, estimate,
 };
-use crate::reference::{self, Exp2Mass};
-use crate::{
+use model_core::{
     Cable, CrossSection, GuideMass, Material, Model, ModelError, PointLoad, Rod, Scalar, Section,
     ShapePoint, ShootingSettings, Stability, Start, Stiffness, Termination, TipLoad,
 };
@@ -101,7 +101,7 @@ fn lit3<T: Scalar>(v: [f64; 3]) -> Vector3<T> {
 fn solved<T: Scalar>(
     model: &Model<T>,
     load: &TipLoad<T>,
-) -> Result<crate::Equilibrium<T>, Failure> {
+) -> Result<model_core::Equilibrium<T>, Failure> {
     let eq = ok(
         "solve input",
         model.solve(load, Start::Cold, &ShootingSettings::default()),
@@ -713,7 +713,7 @@ pub fn planar_reduction_matches_3d<T: Scalar>() -> Outcome {
     for grams in [0.0, 40.2, 83.2] {
         let load = TipLoad::force(lit3([0.0, -grams * 1e-3 * reference::GRAVITY_M_S2, 0.0]));
         let full = solved(&model, &load)?;
-        let planar = crate::planar::PlanarModel::new(&model, &load).ok_or(Failure {
+        let planar = model_core::planar::PlanarModel::new(&model, &load).ok_or(Failure {
             check: "scene is planar",
             value: 0.0,
             limit: 1.0,
@@ -743,7 +743,7 @@ pub fn planar_reduction_matches_3d<T: Scalar>() -> Outcome {
     let sideways = TipLoad::force(lit3([0.0, -0.1, 0.05]));
     holds(
         "out-of-plane load not reduced",
-        crate::planar::PlanarModel::new(&model, &sideways).is_none(),
+        model_core::planar::PlanarModel::new(&model, &sideways).is_none(),
     )
 }
 
@@ -761,7 +761,7 @@ pub fn reduction_meets_tolerance<T: Scalar>() -> Outcome {
     for tolerance in [1e-3, 1e-5] {
         let choice = ok(
             "choice",
-            crate::reduction::choose(&rod, &load, T::lit(tolerance), &settings),
+            model_core::reduction::choose(&rod, &load, T::lit(tolerance), &settings),
         )?;
         holds("planar picked for an in-plane scene", choice.variant.planar)?;
         within(
@@ -817,9 +817,9 @@ where
     )?;
     let mut rod = bench()?;
     let mut refused = false;
-    for _ in 0..crate::MAX_GUIDES + 1 {
+    for _ in 0..model_core::MAX_GUIDES + 1 {
         refused |= rod
-            .push_guide(crate::Guide {
+            .push_guide(model_core::Guide {
                 s_m: T::lit(0.1),
                 thickness_m: T::zero(),
                 mass_kg: T::zero(),
