@@ -11,17 +11,24 @@
 //! | --- | --- |
 //! | kinematics `r' = R v`, `R' = R hat(u)`; frame representations | [`kinematics`] |
 //! | constitutive law, `v`, `u'` (eqs. 2.9-2.13) | [`constitutive`] |
+//! | the scene: sections, guides, cables, base | [`rod`] |
+//! | loads: tip load, point loads, loads that read the shape | [`loads`] |
 //! | mass distribution, average and accurate guide mass (ch. 3.6-3.8) | [`mass`] |
 //! | section transitions and point moments (ch. 3.4-3.5) | [`transitions`] |
 //! | the integration grid (breakpoints, distal forces) | [`plan`] |
-//! | one RK4 sweep with forward sensitivities | `integrate` |
-//! | cable lengths (ch. 3.8.1) | [`rod::Cable`], summed in `integrate` |
-//! | the shooting solve, load continuation | [`shooting`] |
+//! | the rod's equations behind one trait: dead loads, force as state, planar | `ode` |
+//! | one RK4 sweep over the plan with tangents and observers | `sweep` |
+//! | cable lengths (ch. 3.8.1), an observer of the sweep | `sweep::cables` |
+//! | one damped Newton/LM, one load continuation, the stopping rules | `solve` |
+//! | the forward entry points: solve, evaluate, shape | [`shooting`] |
 //! | the planar reduction (in-plane loads) | [`planar`] |
 //! | picking the cheapest variant that meets a tolerance | [`reduction`] |
 //! | elastic stability of an equilibrium (Jacobi fields) | [`stability`] |
 //! | the inverse: tip load from cable lengths | [`inverse`] |
 //! | shape output | [`shape`] |
+//!
+//! The model's document, with every equation and the corrections to the thesis: `MODEL.md` at the
+//! repository's root.
 //!
 //! SI units throughout; names carry them (`length_m`, `force_n`).
 
@@ -38,11 +45,12 @@
 
 pub mod constitutive;
 pub mod error;
-mod integrate;
 pub mod inverse;
 pub mod kinematics;
+pub mod loads;
 pub mod mass;
 pub mod model;
+mod ode;
 pub mod plan;
 pub mod planar;
 pub mod reduction;
@@ -51,19 +59,22 @@ pub mod rod;
 pub mod scalar;
 pub mod shape;
 pub mod shooting;
+mod solve;
 pub mod stability;
+mod sweep;
 pub mod transitions;
 
 pub use constitutive::{CrossSection, Material, Stiffness};
 pub use error::ModelError;
 pub use kinematics::{Attitude, LieGroup, Quaternion, RotationMatrix};
+pub use loads::{NoShapeLoad, NodePose, PointLoad, PoseChange, ShapeLoad, TipLoad, Wrench};
 pub use mass::GuideMass;
-pub use model::{Evaluation, Model};
+pub use model::Model;
 pub use report::{MAX_FRAME_DRIFT, SolveReport, Termination};
-pub use rod::{Cable, Guide, PointLoad, Rod, Section, StrainModel};
+pub use rod::{Cable, Guide, Rod, Section, StrainModel};
 pub use scalar::Scalar;
 pub use shape::ShapePoint;
-pub use shooting::{Equilibrium, ShootingSettings, Start, TipLoad};
+pub use shooting::{Equilibrium, Evaluation, ShootingSettings, Start};
 pub use stability::Stability;
 
 /// Most sections in a rod.

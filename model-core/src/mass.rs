@@ -5,21 +5,8 @@
 //! is piecewise linear and exact; the thesis's modulo arithmetic computes the same function.
 
 use crate::Scalar;
+pub use crate::rod::GuideMass;
 use crate::rod::Rod;
-
-/// How the guides' mass enters the model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum GuideMass {
-    /// Guides are weightless (the bare rod, or guide mass already folded into the line density).
-    Ignore,
-    /// Average-mass model: each section's guide mass is spread uniformly over the section.
-    Average,
-    /// Accurate-mass model: each guide is a short segment of its own line density, `mass / thickness`,
-    /// on top of the rod's.
-    #[default]
-    Accurate,
-}
 
 /// Whether a guide's mass is placed as its own segment (and so its edges are breakpoints).
 pub(crate) fn guide_is_segment<T: Scalar>(rod: &Rod<T>, guide: &crate::Guide<T>) -> bool {

@@ -33,6 +33,10 @@ pub(crate) struct Node<T> {
     pub cable_ends: u8,
     /// Sum of point moments here (global), N m; at the tip, added to the tip moment.
     pub moment_nm: Vector3<T>,
+    /// Sum of point forces and hung weights here (global), N. The closed-form internal force has
+    /// them in each interval's distal force already; the internal-force-as-state equations apply them
+    /// as jumps of `n` at the node.
+    pub force_n: Vector3<T>,
 }
 
 /// The open interval between node `k` and node `k + 1`.
@@ -104,6 +108,7 @@ impl<T: Scalar, const NODES: usize> Plan<T, NODES> {
                     guide: NO_GUIDE,
                     cable_ends: 0,
                     moment_nm: Vector3::zeros(),
+                    force_n: Vector3::zeros(),
                 };
                 nodes
                     .push(node)
@@ -137,6 +142,7 @@ impl<T: Scalar, const NODES: usize> Plan<T, NODES> {
                 && i > 0
             {
                 node.moment_nm += load.moment_nm;
+                node.force_n += load.force_n + rod.gravity_m_s2 * load.mass_kg;
             }
         }
 

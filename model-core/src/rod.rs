@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::constitutive::Stiffness;
 use crate::error::{ModelError, finite, finite_vec, non_negative, positive};
-use crate::mass::GuideMass;
+use crate::loads::PointLoad;
 use crate::{MAX_CABLES, MAX_GUIDES, MAX_POINT_LOADS, MAX_SECTIONS, Scalar};
 
 /// One section of the backbone: uniform stiffness and line density.
@@ -70,48 +70,18 @@ impl<T: Scalar> Cable<T> {
     }
 }
 
-/// A load at one point of the backbone: a hung mass, a force and a moment, all fixed in the global
-/// frame (dead loads). A load at the tip adds to the tip load.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointLoad<T> {
-    /// Arc length, m.
-    pub s_m: T,
-    /// Hung mass, kg (its weight follows gravity).
-    pub mass_kg: T,
-    /// Force, N, global frame.
-    pub force_n: Vector3<T>,
-    /// Moment, N m, global frame.
-    pub moment_nm: Vector3<T>,
-}
-
-impl<T: Scalar> PointLoad<T> {
-    /// A mass hung at `s_m`.
-    pub fn mass(s_m: T, mass_kg: T) -> Self {
-        Self {
-            s_m,
-            mass_kg,
-            force_n: Vector3::zeros(),
-            moment_nm: Vector3::zeros(),
-        }
-    }
-    /// A force at `s_m`.
-    pub fn force(s_m: T, force_n: Vector3<T>) -> Self {
-        Self {
-            s_m,
-            mass_kg: T::zero(),
-            force_n,
-            moment_nm: Vector3::zeros(),
-        }
-    }
-    /// A moment at `s_m`.
-    pub fn moment(s_m: T, moment_nm: Vector3<T>) -> Self {
-        Self {
-            s_m,
-            mass_kg: T::zero(),
-            force_n: Vector3::zeros(),
-            moment_nm,
-        }
-    }
+/// How the guides' mass enters the model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GuideMass {
+    /// Guides are weightless (the bare rod, or guide mass already folded into the line density).
+    Ignore,
+    /// Average-mass model: each section's guide mass is spread uniformly over the section.
+    Average,
+    /// Accurate-mass model: each guide is a short segment of its own line density, `mass / thickness`,
+    /// on top of the rod's.
+    #[default]
+    Accurate,
 }
 
 /// Which constitutive model for shear and extension.

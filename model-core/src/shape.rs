@@ -2,6 +2,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::Scalar;
+use crate::error::ModelError;
+
 /// The backbone at one arc length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapePoint<T> {
@@ -55,4 +58,28 @@ impl<T: Copy> ShapeSink<'_, T> {
             self.written += 1;
         }
     }
+}
+
+/// Checks shape queries: finite, increasing, within `[0, length_m]`, and an output buffer of at
+/// least `out_len` points.
+pub(crate) fn check_queries<T: Scalar>(
+    s_m: &[T],
+    out_len: usize,
+    length_m: T,
+) -> Result<(), ModelError> {
+    if out_len < s_m.len() {
+        return Err(ModelError::Mismatch("shape queries and output buffer"));
+    }
+    let mut previous = T::zero();
+    for &s in s_m {
+        crate::error::finite(s, "shape arc length")?;
+        if s < previous {
+            return Err(ModelError::Unordered("shape arc lengths"));
+        }
+        if s > length_m {
+            return Err(ModelError::OutOfRange("shape arc length"));
+        }
+        previous = s;
+    }
+    Ok(())
 }

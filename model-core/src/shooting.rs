@@ -1,60 +1,29 @@
-//! The forward problem: find the base strain `u(0)` that meets the tip-moment condition
-//! `R(L) C u(L) = tau_tip` (thesis ch. 2.5: a shooting problem with three unknowns and three residuals).
+//! The forward problem's entry points: the equilibrium of a model under a tip load (thesis ch. 2.5: a
+//! shooting problem), one sweep without solving, and the shape of a solved equilibrium.
 //!
-//! Damped Newton with a trust region on the change of base strain; the Jacobian comes from the sweep's
-//! forward sensitivities. A cold start first tries Newton from the small-deflection guess and keeps the
-//! answer only if the Jacobi-field stability test passes; otherwise it ramps all loads from zero
-//! (load continuation, secant predictor, adaptive step), which follows the branch connected to the
-//! unloaded rod. A converged but unstable equilibrium (the thesis's exp-2 scene at 62-83 g from a zero
-//! start lands on one) is reported as [`Termination::Unstable`], never as success.
+//! Under dead loads the unknowns are the base strain `u(0)` and the tip condition is
+//! `R(L) C u(L) = tau_tip` (three unknowns, three residuals: `ode/dead_load.rs`). With loads that
+//! read the shape ([`crate::loads::ShapeLoad`]) the internal force and moment become states and the
+//! unknowns are `n(0)`, `m(0)` (`ode/force_state.rs`). Either is solved by `solve/`.
 
 use heapless::Vec;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 
-use crate::error::{ModelError, finite_vec};
-use crate::integrate::{Sweep, Tangents, sweep};
+use crate::error::{ModelError, finite_vec, positive};
 use crate::kinematics::Attitude;
+use crate::loads::ShapeLoad;
+pub use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
+use crate::ode::RodOde;
+use crate::ode::dead_load::DeadLoadRod;
+use crate::ode::force_state::ForceStateRod;
+use crate::report::{SolveReport, Termination};
+use crate::shape::{ShapePoint, ShapeSink, check_queries};
+pub use crate::solve::stopping::default_tolerance;
+use crate::solve::{Failed, Solved};
 use crate::stability::Stability;
+use crate::sweep::{TangentSet, sweep};
 use crate::{MAX_CABLES, Scalar};
-
-/// The load at the tip, global frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TipLoad<T> {
-    /// Force, N.
-    pub force_n: Vector3<T>,
-    /// Moment, N m.
-    pub moment_nm: Vector3<T>,
-}
-
-impl<T: Scalar> TipLoad<T> {
-    /// No tip load.
-    pub fn zero() -> Self {
-        Self {
-            force_n: Vector3::zeros(),
-            moment_nm: Vector3::zeros(),
-        }
-    }
-    /// A tip force only.
-    pub fn force(force_n: Vector3<T>) -> Self {
-        Self {
-            force_n,
-            moment_nm: Vector3::zeros(),
-        }
-    }
-    /// A tip moment only.
-    pub fn moment(moment_nm: Vector3<T>) -> Self {
-        Self {
-            force_n: Vector3::zeros(),
-            moment_nm,
-        }
-    }
-    pub(crate) fn validate(&self) -> Result<(), ModelError> {
-        finite_vec(&self.force_n, "tip force")?;
-        finite_vec(&self.moment_nm, "tip moment")
-    }
-}
 
 /// Where a solve starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -96,17 +65,23 @@ impl<T: Scalar> Default for ShootingSettings<T> {
     }
 }
 
-/// The default dimensionless tolerance: `1e-11` in f64, `200 eps` (2.4e-5) in f32: a few times the
-/// rounding floor of a sweep.
-pub fn default_tolerance<T: Scalar>() -> T {
-    (T::default_epsilon() * T::lit(200.0)).max(T::lit(1e-11))
+impl<T: Scalar> ShootingSettings<T> {
+    fn validate(&self) -> Result<(), ModelError> {
+        positive(self.tolerance, "solver tolerance")?;
+        positive(self.max_rotation_step_rad, "trust region").map(|_| ())
+    }
 }
 
 /// A solved equilibrium.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Equilibrium<T> {
-    /// The shooting unknown `u(0)`, 1/m, body frame.
+    /// The base strain `u(0)`, 1/m, body frame (the dead-load shooting unknown).
     pub base_strain_per_m: Vector3<T>,
+    /// The internal force just distal of the clamp, N, global frame (the clamp's reaction is its
+    /// negative).
+    pub base_force_n: Vector3<T>,
+    /// The internal moment just distal of the clamp, N m, global frame.
+    pub base_moment_nm: Vector3<T>,
     /// The tip load it was solved for.
     pub load: TipLoad<T>,
     /// Tip position, m.
@@ -126,256 +101,97 @@ impl<T: Scalar> Equilibrium<T> {
     }
 }
 
-/// Work counters shared by the stages of one solve.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Work {
-    pub iterations: u16,
-    pub sweeps: u16,
+/// One sweep at a given base strain and tip load, without solving: for diagnostics and tests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Evaluation<T> {
+    /// Tip position, m.
+    pub tip_position_m: Vector3<T>,
+    /// Tip frame.
+    pub tip_rotation: Matrix3<T>,
+    /// `C u(L) - R(L)^T tau_tip`, N m, body frame.
+    pub moment_residual_nm: Vector3<T>,
+    /// Cable lengths, m, one per cable (the rest zero).
+    pub cable_lengths_m: [T; MAX_CABLES],
+    /// Largest `|R^T R - I|` met at the nodes (rotation drift of the integrator).
+    pub frame_drift: T,
 }
 
-impl Work {
-    fn sweep(&mut self) {
-        self.sweeps = self.sweeps.saturating_add(1);
-    }
-}
+/// The base of an equilibrium: strain (1/m, body), internal force (N) and moment (N m), global.
+pub(crate) type Base<T> = (Vector3<T>, Vector3<T>, Vector3<T>);
 
-/// The outcome of one Newton solve at a fixed load scale.
-pub(crate) struct Newton<T> {
-    pub u0: Vector3<T>,
-    pub sweep: Sweep<T>,
-    pub residual: T,
-    pub termination: Termination,
-}
-
-impl<T: Scalar> Newton<T> {
-    /// The stability verdict from the final sweep's Jacobi fields.
-    fn stability(&self, conservative: bool, length_m: T) -> Stability<T> {
-        crate::stability::of_sweep(conservative, &self.sweep, length_m)
-    }
-}
-
-/// Rejected steps tolerated in a row before the solve is declared stalled.
-const MAX_REJECTIONS: u8 = 8;
-
-/// A cold start's first guess is the small-deflection one with its base rotation `|u0| L` capped at
-/// this angle, rad (the true rotation grows more slowly than the linear estimate).
-const GUESS_ANGLE_RAD: f64 = 2.5;
-
-/// During continuation a corrected solution may differ from its prediction by at most this base
-/// rotation, rad; a larger jump is treated as a hop to another branch and the load step is halved.
-const PREDICTOR_TRUST_RAD: f64 = 0.5;
-
-/// Newton iterations a cold start gives the full load before it falls back to continuation.
-const DIRECT_ITERATIONS: u16 = 12;
-
-/// Levenberg-Marquardt on `u(0)` at load scale `alpha`: the Newton step when it reduces the residual
-/// (`mu = 0`), a damped step `(J^T J + mu diag(J^T J)) du = -J^T e` when it does not, with a trust region
-/// on `|du| L`.
-pub(crate) fn newton<T: Scalar, A: Attitude<T>, const NODES: usize>(
-    model: &Model<T, A, NODES>,
+/// The equilibrium a solve ended with; `base` maps the unknowns to the base's strain, force, moment.
+pub(crate) fn equilibrium<T: Scalar, const K: usize>(
     load: &TipLoad<T>,
-    alpha: T,
-    start: Vector3<T>,
-    settings: &ShootingSettings<T>,
-    max_iterations: u16,
-    work: &mut Work,
-) -> Newton<T> {
-    let run = |u: &Vector3<T>, work: &mut Work| {
-        work.sweep();
-        sweep(
-            model,
-            &model.inputs(u, load, alpha),
-            Tangents::base_strain(settings.check_stability),
-            None,
-        )
+    cables: usize,
+    outcome: Result<Solved<T, K>, Failed>,
+    base: impl Fn(&SVector<T, K>) -> Base<T>,
+) -> Equilibrium<T> {
+    let solved = match outcome {
+        Ok(solved) => solved,
+        Err(failed) => {
+            return Equilibrium {
+                base_strain_per_m: Vector3::zeros(),
+                base_force_n: Vector3::zeros(),
+                base_moment_nm: Vector3::zeros(),
+                load: *load,
+                tip_position_m: Vector3::zeros(),
+                tip_rotation: Matrix3::identity(),
+                cable_lengths_m: Vec::new(),
+                report: SolveReport {
+                    termination: Termination::ContinuationFailed,
+                    iterations: failed.work.iterations,
+                    sweeps: failed.work.sweeps,
+                    residual: T::zero(),
+                    load_steps: failed.load_steps,
+                    stability: Stability::Unchecked,
+                },
+            };
+        }
     };
-    let mut u0 = start;
-    let mut sw = run(&u0, work);
+    let outcome = &solved.newton;
+    let mut cable_lengths_m = Vec::new();
+    for c in outcome.sweep.cable_m.iter().take(cables) {
+        // Cannot overflow: at most MAX_CABLES cables.
+        let _ = cable_lengths_m.push(*c);
+    }
+    let (base_strain_per_m, base_force_n, base_moment_nm) = base(&outcome.x);
+    Equilibrium {
+        base_strain_per_m,
+        base_force_n,
+        base_moment_nm,
+        load: *load,
+        tip_position_m: outcome.sweep.tip_position_m,
+        tip_rotation: outcome.sweep.tip_rotation,
+        cable_lengths_m,
+        report: SolveReport {
+            termination: outcome.termination,
+            iterations: solved.work.iterations,
+            sweeps: solved.work.sweeps,
+            residual: outcome.residual,
+            load_steps: solved.load_steps,
+            stability: solved.stability,
+        },
+    }
+}
+
+/// The shape of `ode` at unknowns `x`, at the arc lengths `s_m`, into `out`.
+pub(crate) fn shape_of<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    x: &SVector<T, K>,
+    s_m: &[T],
+    out: &mut [ShapePoint<T>],
+) -> Result<usize, ModelError> {
+    check_queries(s_m, out.len(), ode.length_m())?;
+    let mut sink = ShapeSink {
+        s_m,
+        out,
+        written: 0,
+    };
+    let sw = sweep(ode, x, TangentSet::NONE, Some(&mut sink));
     if !sw.finite {
-        return Newton {
-            u0,
-            sweep: sw,
-            residual: T::zero(),
-            termination: Termination::NonFinite,
-        };
+        return Err(ModelError::NonFinite("sweep result"));
     }
-    let mut residual = model.moment_residual(&sw.moment_residual_nm);
-    let max_step = settings.max_rotation_step_rad / model.length_m();
-    let mut mu = T::zero();
-    let mut rejections = 0u8;
-    for _ in 0..max_iterations {
-        if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
-            return Newton {
-                u0,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
-        }
-        let jacobian = Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]);
-        let step = if mu == T::zero() {
-            jacobian.lu().solve(&-sw.moment_residual_nm)
-        } else {
-            let jtj = jacobian.tr_mul(&jacobian);
-            let damped = jtj + Matrix3::from_diagonal(&jtj.diagonal()) * mu;
-            damped
-                .cholesky()
-                .map(|c| c.solve(&-jacobian.tr_mul(&sw.moment_residual_nm)))
-        };
-        let Some(mut step) = step.filter(|d| d.iter().all(|x| x.is_finite())) else {
-            if mu == T::zero() {
-                mu = T::lit(1e-3);
-                continue;
-            }
-            return Newton {
-                u0,
-                sweep: sw,
-                residual,
-                termination: Termination::Singular,
-            };
-        };
-        // At the rounding floor the residual stops decreasing. A Newton correction that turns the base
-        // and moves the tip by less than the tolerance may mean the answer is as good as the scalar
-        // type allows: it is when the tip move is negligible outright, or when the correction, tried,
-        // no longer lowers the residual. On a badly conditioned rod a correction that small can still
-        // lower the residual a hundredfold and move the tip by a tenth of a millimetre.
-        let tip_move =
-            (sw.d_position(0) * step.x + sw.d_position(1) * step.y + sw.d_position(2) * step.z)
-                .norm();
-        let at_floor =
-            mu == T::zero() && model.step_converged(&step, &u0, tip_move, settings.tolerance);
-        if at_floor && model.tip_move_negligible(tip_move, settings.tolerance) {
-            return Newton {
-                u0,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
-        }
-        let norm = step.norm();
-        if norm > max_step {
-            step *= max_step / norm;
-        }
-        work.iterations = work.iterations.saturating_add(1);
-        let trial_u = u0 + step;
-        let trial = run(&trial_u, work);
-        let trial_residual = if trial.finite {
-            model.moment_residual(&trial.moment_residual_nm)
-        } else {
-            residual
-        };
-        if trial.finite && trial_residual < residual {
-            (u0, sw, residual) = (trial_u, trial, trial_residual);
-            mu *= T::lit(0.25);
-            if mu < T::lit(1e-6) {
-                mu = T::zero();
-            }
-            rejections = 0;
-        } else if at_floor {
-            return Newton {
-                u0,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
-        } else {
-            mu = if mu == T::zero() {
-                T::lit(1e-3)
-            } else {
-                mu * T::lit(8.0)
-            };
-            rejections += 1;
-            if rejections >= MAX_REJECTIONS {
-                let termination =
-                    if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
-                        Termination::Converged
-                    } else {
-                        Termination::Stalled
-                    };
-                return Newton {
-                    u0,
-                    sweep: sw,
-                    residual,
-                    termination,
-                };
-            }
-        }
-    }
-    let termination = if model.moment_converged(&sw.moment_residual_nm, &u0, settings.tolerance) {
-        Termination::Converged
-    } else {
-        Termination::IterationLimit
-    };
-    Newton {
-        u0,
-        sweep: sw,
-        residual,
-        termination,
-    }
-}
-
-/// Load continuation from the unloaded rod (where `u(0) = 0` is exact) to the full load.
-/// `first_step` is the first load increment (a fraction of the full load).
-pub(crate) fn continuation<T: Scalar, A: Attitude<T>, const NODES: usize>(
-    model: &Model<T, A, NODES>,
-    load: &TipLoad<T>,
-    settings: &ShootingSettings<T>,
-    first_step: T,
-    work: &mut Work,
-    load_steps: &mut u16,
-) -> Option<Newton<T>> {
-    let (mut alpha, mut u0) = (T::zero(), Vector3::zeros());
-    let (mut prev_alpha, mut prev_u0) = (T::zero(), Vector3::zeros());
-    let mut step = first_step;
-    let min_step = T::lit(1.0 / 4096.0);
-    let corrector_iterations = settings.max_iterations.min(12);
-    // Every load step is checked for stability and for staying near its prediction, so that a large
-    // step cannot hop onto another branch.
-    let tracked = ShootingSettings {
-        check_stability: true,
-        ..*settings
-    };
-    let trust = T::lit(PREDICTOR_TRUST_RAD) / model.length_m();
-    while *load_steps < settings.max_load_steps {
-        let target = (alpha + step).min(T::one());
-        // Secant predictor along the branch.
-        let guess = if alpha > prev_alpha {
-            u0 + (u0 - prev_u0) * ((target - alpha) / (alpha - prev_alpha))
-        } else {
-            model.linear_guess(load, target)
-        };
-        *load_steps = load_steps.saturating_add(1);
-        let iterations_before = work.iterations;
-        let out = newton(
-            model,
-            load,
-            target,
-            guess,
-            &tracked,
-            corrector_iterations,
-            work,
-        );
-        let accepted = out.termination.is_success()
-            && (out.u0 - guess).norm() <= trust
-            && out
-                .stability(model.conservative(&load.moment_nm), model.length_m())
-                .is_acceptable();
-        if accepted {
-            (prev_alpha, prev_u0) = (alpha, u0);
-            (alpha, u0) = (target, out.u0);
-            if alpha >= T::one() {
-                return Some(out);
-            }
-            let easy = work.iterations.saturating_sub(iterations_before) <= 3;
-            step *= if easy { T::lit(2.0) } else { T::lit(1.25) };
-        } else {
-            step *= T::lit(0.5);
-            if step < min_step {
-                return None;
-            }
-        }
-    }
-    None
+    Ok(sink.written)
 }
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
@@ -393,125 +209,124 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         if let Start::Warm(u) = &start {
             finite_vec(u, "warm-start base strain")?;
         }
-        crate::error::positive(settings.tolerance, "solver tolerance")?;
-        crate::error::positive(settings.max_rotation_step_rad, "trust region")?;
-        let mut work = Work::default();
-        let mut load_steps = 0u16;
+        settings.validate()?;
+        let ode = DeadLoadRod::new(self, load, T::one());
+        let start = match start {
+            Start::Cold => None,
+            Start::Warm(u) => Some(u),
+        };
+        let outcome = crate::solve::solve(&ode, start, settings);
+        Ok(equilibrium(load, self.rod().cables.len(), outcome, |u| {
+            self.dead_load_base(load, u)
+        }))
+    }
 
-        // A cold start tries the full load from the capped small-deflection guess; if that fails, load
-        // continuation starts with a step that bends the linear rod by about the same angle.
-        let (direct_start, direct_iterations, first_step) = match start {
-            Start::Cold => {
-                let guess = self.linear_guess(load, T::one());
-                let angle = guess.norm() * self.length_m();
-                let limit = T::lit(GUESS_ANGLE_RAD);
-                let scale = if angle > limit {
-                    limit / angle
-                } else {
-                    T::one()
-                };
-                (
-                    guess * scale,
-                    settings.max_iterations.min(DIRECT_ITERATIONS),
-                    scale.min(T::lit(0.5)),
-                )
-            }
-            Start::Warm(u) => (u, settings.max_iterations, T::lit(0.25)),
-        };
-        let check = |out: &mut Newton<T>| {
-            if out.termination.is_success() && settings.check_stability {
-                let verdict = out.stability(self.conservative(&load.moment_nm), self.length_m());
-                if !verdict.is_acceptable() {
-                    out.termination = Termination::Unstable;
-                }
-                verdict
-            } else {
-                Stability::Unchecked
-            }
-        };
-        let mut result = Some({
-            let mut out = newton(
-                self,
-                load,
-                T::one(),
-                direct_start,
-                settings,
-                direct_iterations,
-                &mut work,
-            );
-            let stability = check(&mut out);
-            (out, stability)
-        });
-        let cold_allowed = matches!(start, Start::Cold) || settings.cold_fallback;
-        let succeeded = result
-            .as_ref()
-            .is_some_and(|(out, _)| out.termination.is_success());
-        if !succeeded && cold_allowed {
-            result =
-                match continuation(self, load, settings, first_step, &mut work, &mut load_steps) {
-                    Some(mut out) => {
-                        let stability = check(&mut out);
-                        Some((out, stability))
-                    }
-                    None => result.map(|(mut out, stability)| {
-                        out.termination = Termination::ContinuationFailed;
-                        (out, stability)
-                    }),
-                };
-        }
-        let Some((mut outcome, stability)) = result else {
-            return Ok(self.failed(load, Termination::ContinuationFailed, work, load_steps));
-        };
-        if outcome.termination.is_success()
-            && !(outcome.sweep.frame_drift.is_finite()
-                && outcome.sweep.frame_drift <= T::lit(MAX_FRAME_DRIFT))
-        {
-            outcome.termination = Termination::FrameDrift;
-        }
+    /// The base of a dead-load equilibrium with base strain `u0`: the internal force is the sum of the
+    /// loads, the moment `R0 C u0`.
+    pub(crate) fn dead_load_base(&self, load: &TipLoad<T>, u0: &Vector3<T>) -> Base<T> {
+        let c = self.base_compliance().map_or(Vector3::zeros(), |c| c.c);
+        (
+            *u0,
+            load.force_n + self.plan().base_force_n(),
+            self.rod().base_orientation * c.component_mul(u0),
+        )
+    }
 
-        let mut cables = Vec::new();
-        for c in outcome.sweep.cable_m.iter().take(self.rod().cables.len()) {
-            // Cannot overflow: at most MAX_CABLES cables.
-            let _ = cables.push(*c);
+    /// One sweep at base strain `u0` (1/m) under `load`, without solving for the boundary condition.
+    pub fn evaluate(
+        &self,
+        base_strain_per_m: &Vector3<T>,
+        load: &TipLoad<T>,
+    ) -> Result<Evaluation<T>, ModelError> {
+        finite_vec(base_strain_per_m, "base strain")?;
+        load.validate()?;
+        let ode = DeadLoadRod::new(self, load, T::one());
+        let out = sweep(&ode, base_strain_per_m, TangentSet::NONE, None);
+        if !out.finite {
+            return Err(ModelError::NonFinite("sweep result"));
         }
-        Ok(Equilibrium {
-            base_strain_per_m: outcome.u0,
-            load: *load,
-            tip_position_m: outcome.sweep.tip_position_m,
-            tip_rotation: outcome.sweep.tip_rotation,
-            cable_lengths_m: cables,
-            report: SolveReport {
-                termination: outcome.termination,
-                iterations: work.iterations,
-                sweeps: work.sweeps,
-                residual: outcome.residual,
-                load_steps,
-                stability,
-            },
+        Ok(Evaluation {
+            tip_position_m: out.tip_position_m,
+            tip_rotation: out.tip_rotation,
+            moment_residual_nm: out.residual,
+            cable_lengths_m: out.cable_m,
+            frame_drift: out.frame_drift,
         })
     }
 
-    fn failed(
+    /// The shape of a solved equilibrium at the arc lengths `s_m` (increasing, within `[0, L]`),
+    /// written into `out` (at least as long). Returns how many points were written.
+    pub fn shape(
         &self,
+        equilibrium: &Equilibrium<T>,
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<usize, ModelError> {
+        self.shape_at(&equilibrium.base_strain_per_m, &equilibrium.load, s_m, out)
+    }
+
+    /// The shape at a given base strain and tip load (see [`Model::shape`]).
+    pub fn shape_at(
+        &self,
+        base_strain_per_m: &Vector3<T>,
         load: &TipLoad<T>,
-        termination: Termination,
-        work: Work,
-        load_steps: u16,
-    ) -> Equilibrium<T> {
-        Equilibrium {
-            base_strain_per_m: Vector3::zeros(),
-            load: *load,
-            tip_position_m: Vector3::zeros(),
-            tip_rotation: Matrix3::identity(),
-            cable_lengths_m: Vec::new(),
-            report: SolveReport {
-                termination,
-                iterations: work.iterations,
-                sweeps: work.sweeps,
-                residual: T::zero(),
-                load_steps,
-                stability: Stability::Unchecked,
-            },
-        }
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<usize, ModelError> {
+        finite_vec(base_strain_per_m, "base strain")?;
+        load.validate()?;
+        let ode = DeadLoadRod::new(self, load, T::one());
+        shape_of(&ode, base_strain_per_m, s_m, out)
+    }
+
+    /// Solves the equilibrium under `load`, the scene's dead loads and `shape_loads`, loads that read
+    /// the shape (a spring pulling a guide, later the tendons), with the internal force and moment as
+    /// states: six unknowns `n(0)`, `m(0)`.
+    ///
+    /// From `Start::Cold` the loads are ramped from zero (load continuation), which follows the branch
+    /// connected to the unloaded rod: these equations have no energy test of stability yet, and the
+    /// answer's `report.stability` is [`Stability::Unchecked`]. `Start::Warm` takes a previous
+    /// equilibrium's base force and moment (from this method or [`Model::solve`]).
+    ///
+    /// Fails only on invalid input, like [`Model::solve`].
+    pub fn solve_with<L: ShapeLoad<T>>(
+        &self,
+        shape_loads: &L,
+        load: &TipLoad<T>,
+        start: Option<&Equilibrium<T>>,
+        settings: &ShootingSettings<T>,
+    ) -> Result<Equilibrium<T>, ModelError> {
+        load.validate()?;
+        settings.validate()?;
+        let ode = ForceStateRod::new(self, shape_loads, load, T::one());
+        let start = match start {
+            Some(eq) => {
+                finite_vec(&eq.base_force_n, "warm-start base force")?;
+                finite_vec(&eq.base_moment_nm, "warm-start base moment")?;
+                Some(ode.unknowns(&eq.base_force_n, &eq.base_moment_nm))
+            }
+            None => None,
+        };
+        let outcome = crate::solve::solve(&ode, start, settings);
+        Ok(equilibrium(load, self.rod().cables.len(), outcome, |x| {
+            ode.base(x)
+        }))
+    }
+
+    /// The shape of an equilibrium from [`Model::solve_with`] under the same `shape_loads` (see
+    /// [`Model::shape`]).
+    pub fn shape_with<L: ShapeLoad<T>>(
+        &self,
+        shape_loads: &L,
+        equilibrium: &Equilibrium<T>,
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<usize, ModelError> {
+        finite_vec(&equilibrium.base_force_n, "base force")?;
+        finite_vec(&equilibrium.base_moment_nm, "base moment")?;
+        equilibrium.load.validate()?;
+        let ode = ForceStateRod::new(self, shape_loads, &equilibrium.load, T::one());
+        let x = ode.unknowns(&equilibrium.base_force_n, &equilibrium.base_moment_nm);
+        shape_of(&ode, &x, s_m, out)
     }
 }

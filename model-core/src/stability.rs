@@ -31,7 +31,7 @@
 //! and the solve relies on load continuation alone to stay on the branch connected to the
 //! unloaded rod.
 
-use nalgebra::Matrix3;
+use nalgebra::{Const, DimMin, Matrix3, SMatrix};
 
 use crate::Scalar;
 
@@ -128,30 +128,21 @@ impl<T> Stability<T> {
     }
 }
 
-/// The verdict on the sweep `sw`, which carried the three base-strain tangents with stability tracking.
-pub(crate) fn of_sweep<T: Scalar>(
-    conservative: bool,
-    sw: &crate::integrate::Sweep<T>,
-    length_m: T,
-) -> Stability<T> {
-    classify(
-        conservative,
-        sw.conjugate_point_m,
-        &Matrix3::from_columns(&[sw.d_moment(0), sw.d_moment(1), sw.d_moment(2)]),
-        &Matrix3::from_columns(&[sw.d_rotation(0), sw.d_rotation(1), sw.d_rotation(2)]),
-        length_m,
-    )
-}
-
-/// The verdict from the sweep's conjugate-point track, the shooting Jacobian `M(L) = de/du0` and
-/// `H(L) = d theta(L)/du0` (both body frame). `conservative` is false when any moment acts.
-pub(crate) fn classify<T: Scalar>(
+/// The verdict from the sweep's conjugate-point track, the shooting Jacobian `M(L) = de/dx0` and
+/// `H(L) = d theta(L)/dx0` (both body frame). `conservative` is false when any moment acts.
+///
+/// Generic in the number of unknowns `K`: the 3D rod's three (`u(0)`), the planar reduction's one
+/// (`k(0)`, with `H` the turn about the plane's normal).
+pub(crate) fn classify<T: Scalar, const K: usize>(
     conservative: bool,
     conjugate_point_m: Option<T>,
-    jacobian: &Matrix3<T>,
-    tip_rotation_tangent: &Matrix3<T>,
+    jacobian: &SMatrix<T, K, K>,
+    tip_rotation_tangent: &SMatrix<T, K, K>,
     length_m: T,
-) -> Stability<T> {
+) -> Stability<T>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
     if !conservative {
         return Stability::NonConservative;
     }

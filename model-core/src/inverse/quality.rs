@@ -1,0 +1,188 @@
+//! What the measurements say about the load at an estimate: identifiability from the data alone
+//! (singular values, condition number, the weakest direction), uncertainty from data and prior
+//! together (the posterior covariance, the force and tip standard deviations), and the verdict.
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use super::basis::{ParamCount, Params};
+use super::reduced::{Linearization, Problem, Reduced};
+use crate::Scalar;
+use crate::kinematics::Attitude;
+
+/// How well the measurements determine the load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Determination {
+    /// Every load component's standard deviation is within [`InverseSettings::max_force_std_n`].
+    Determined,
+    /// Some direction of the load is poorly determined (its standard deviation exceeds the limit).
+    Weak,
+    /// The data cannot determine some direction at all (rank deficient: fewer independent cables
+    /// than unknowns).
+    Undetermined,
+    /// No load of the model explains the measurements within three standard deviations.
+    Inconsistent,
+}
+
+/// What the measurements say about the load, at the estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quality<T, const P: usize> {
+    /// Singular values of the weighted sensitivity `G / s` (per unit parameter), decreasing.
+    #[cfg(feature = "identifiability")]
+    pub singular_values: SVector<T, P>,
+    /// Largest over smallest singular value (infinite when rank deficient).
+    #[cfg(feature = "identifiability")]
+    pub condition_number: T,
+    /// Standard deviation of each parameter (infinite when undetermined).
+    pub param_std: SVector<T, P>,
+    /// Standard deviation of the tip force components, N, global frame.
+    pub force_std_n: Vector3<T>,
+    /// Standard deviation of the tip position components, m, global frame.
+    pub tip_std_m: Vector3<T>,
+    /// The parameter direction the data determine worst (unit vector).
+    #[cfg(feature = "identifiability")]
+    pub weakest_direction: SVector<T, P>,
+    /// Rms of `(model - measured) / s` over the cables.
+    pub residual_rms_sigma: T,
+    /// The verdict.
+    pub determination: Determination,
+}
+
+/// What the cable data alone determine at the estimate.
+pub(super) struct DataOnly<T, const P: usize> {
+    rank_deficient: bool,
+    /// The parameters' covariance from the data alone (none when rank deficient).
+    covariance: Option<SMatrix<T, P, P>>,
+}
+
+impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, T, A, P, NODES> {
+    /// The fit's quality: identifiability from the data alone, uncertainty from data and prior
+    /// together.
+    pub(super) fn quality(
+        &self,
+        lin: &Linearization<T, P>,
+        red: Option<&Reduced<T, P>>,
+    ) -> Quality<T, P>
+    where
+        Params: ParamCount<T, P>,
+    {
+        let inv_std = T::one() / self.settings.length_std_m;
+        let residual_rms_sigma = if self.cables > 0 {
+            (lin.rc.norm_squared() / T::lit(self.cables as f64)).sqrt() * inv_std
+        } else {
+            T::zero()
+        };
+        let infinite: T = T::max_value().unwrap_or_else(|| T::lit(1e300));
+        let mut quality: Quality<T, P> = Quality {
+            #[cfg(feature = "identifiability")]
+            singular_values: SVector::zeros(),
+            #[cfg(feature = "identifiability")]
+            condition_number: infinite,
+            param_std: SVector::repeat(infinite),
+            force_std_n: Vector3::repeat(infinite),
+            tip_std_m: Vector3::repeat(infinite),
+            #[cfg(feature = "identifiability")]
+            weakest_direction: SVector::zeros(),
+            residual_rms_sigma,
+            // A misfit beyond three standard deviations is the verdict whatever else is known: no
+            // load explains the data, however well or badly the data would determine one.
+            determination: if residual_rms_sigma > T::lit(3.0) {
+                Determination::Inconsistent
+            } else {
+                Determination::Undetermined
+            },
+        };
+        let Some(red) = red else {
+            return quality;
+        };
+        let Some(data) = self.data_only(red, &mut quality) else {
+            return quality;
+        };
+        // Covariance of p: the inverse information, from the data alone when there is no prior.
+        let covariance = if self.prior_weight.iter().all(|w| *w == T::zero()) {
+            match data.covariance {
+                Some(c) if !data.rank_deficient => c,
+                _ => return quality,
+            }
+        } else {
+            match self.information(red).cholesky() {
+                Some(c) => c.inverse(),
+                None => return quality,
+            }
+        };
+        quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
+        let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
+        quality.force_std_n = force_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
+        let d_tip = lin.d_tip_p - lin.d_tip_u * red.a;
+        let tip_cov = d_tip * covariance * d_tip.transpose();
+        quality.tip_std_m = tip_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        let moment_cov = self.basis.moment_nm * covariance * self.basis.moment_nm.transpose();
+        let worst = quality
+            .force_std_n
+            .max()
+            .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
+        quality.determination = if residual_rms_sigma > T::lit(3.0) {
+            Determination::Inconsistent
+        } else if data.rank_deficient {
+            Determination::Undetermined
+        } else if worst > self.settings.max_force_std_n {
+            Determination::Weak
+        } else {
+            Determination::Determined
+        };
+        quality
+    }
+
+    /// What the data alone say, from the singular values of `G` (not of `G^T G`: the normal matrix
+    /// squares the condition number, which f32 cannot hold for the axial direction). Fills the
+    /// singular values, condition number and weakest direction; `None` if the SVD does not converge.
+    #[cfg(feature = "identifiability")]
+    fn data_only(&self, red: &Reduced<T, P>, quality: &mut Quality<T, P>) -> Option<DataOnly<T, P>>
+    where
+        Params: ParamCount<T, P>,
+    {
+        let (singular, v) = Params::svd(red.g)?;
+        let (mut largest, mut smallest, mut weakest) =
+            (T::zero(), quality.condition_number, 0usize);
+        for (i, &value) in singular.iter().enumerate() {
+            largest = largest.max(value);
+            if value < smallest {
+                (smallest, weakest) = (value, i);
+            }
+        }
+        let mut sorted = singular;
+        crate::scalar::insertion_sort(sorted.as_mut_slice(), |a, b| a > b);
+        quality.singular_values = sorted;
+        quality.weakest_direction = v.column(weakest).into_owned();
+        let rank_deficient =
+            smallest <= largest * T::default_epsilon() * T::lit(100.0) || largest == T::zero();
+        if !rank_deficient {
+            quality.condition_number = largest / smallest;
+        }
+        // V diag(1 / sigma^2) V^T.
+        let covariance = (!rank_deficient).then(|| {
+            v * SMatrix::<T, P, P>::from_diagonal(&singular.map(|x| T::one() / (x * x)))
+                * v.transpose()
+        });
+        Some(DataOnly {
+            rank_deficient,
+            covariance,
+        })
+    }
+
+    /// What the data alone say, without the SVD (the controller's flash): rank deficient when there
+    /// are fewer cables than parameters or `G^T G` is not positive definite. A direction the data
+    /// determine only numerically badly then shows as [`Determination::Weak`] through its standard
+    /// deviation rather than as [`Determination::Undetermined`].
+    #[cfg(not(feature = "identifiability"))]
+    fn data_only(&self, red: &Reduced<T, P>, _: &mut Quality<T, P>) -> Option<DataOnly<T, P>> {
+        let covariance = (self.cables >= P)
+            .then(|| red.g.tr_mul(&red.g).cholesky().map(|c| c.inverse()))
+            .flatten();
+        Some(DataOnly {
+            rank_deficient: covariance.is_none(),
+            covariance,
+        })
+    }
+}

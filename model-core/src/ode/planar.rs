@@ -1,0 +1,461 @@
+//! The planar reduction's equations: when every load lies in one plane through the base tangent and
+//! the section bends freely about the plane's normal, the rod stays in that plane, and the 3D statics
+//! reduce to position `(x, y)`, tangent direction `(c, s)` and one curvature `k`:
+//!
+//! `r' = v_t t + v_n t_perp`, `t' = k t_perp`, `E I k' = -(r' x n)_z`,
+//! `v_t = 1 + n.t / E A`, `v_n = n.t_perp / G A` (or `1, 0` for a Kirchhoff rod),
+//!
+//! with `t = (c, s)`, `t_perp = (-s, c)`: five states instead of sixteen, no frame to orthonormalise
+//! (the direction is renormalised after each step), one shooting unknown `k(0)`. Cable holes rotate
+//! with the frame about the plane's normal, so cable lengths and the 3D shape follow exactly.
+//!
+//! Linearised (a tangent `(dr, dt, dk)`): `dr' = dt v_t + t dv_t + dt_perp v_n + t_perp dv_n`,
+//! `dt' = t_perp dk + dt_perp k`, `E I dk' = -(dr' x n)_z`, with `dv_t = n.dt / E A`,
+//! `dv_n = n.dt_perp / G A`. The in-plane Jacobi field is the turn `t x dt` per unit `dk(0)`.
+
+use nalgebra::{Matrix3, SVector, Vector2, Vector3};
+
+use super::dead_load::compensated_add;
+use super::{Family, Linear, Pose, RodOde, straight_base_moment};
+use crate::Scalar;
+use crate::kinematics::Attitude;
+use crate::loads::TipLoad;
+use crate::model::{Grid, Model};
+use crate::plan::{Interval, Node};
+use crate::rod::StrainModel;
+use crate::shape::ShapePoint;
+
+/// The plane a scene stays in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane<T> {
+    /// The base tangent (first in-plane axis), global.
+    pub e1: Vector3<T>,
+    /// The second in-plane axis, `normal x e1`, global.
+    pub e2: Vector3<T>,
+    /// The plane's unit normal, global.
+    pub normal: Vector3<T>,
+}
+
+/// One section in the plane: bending stiffness about the normal (N m^2), `1 / G A`, `1 / E A` (1/N).
+pub(crate) type PlanarSection<T> = (T, T, T);
+
+/// The planar equations of a model under an in-plane load.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlanarRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
+    model: &'a Model<T, A, NODES>,
+    plane: Plane<T>,
+    sections: &'a [PlanarSection<T>],
+    load: TipLoad<T>,
+    alpha: T,
+    kirchhoff: bool,
+    /// The normal in the base's local frame (the body axis the plane turns about).
+    local_normal: Vector3<T>,
+    /// `[e1 e2 n]^T R0`: the frame is `[e1 c + e2 s, e2 c - e1 s, n]` times this.
+    basis: Matrix3<T>,
+    /// The smallest bending stiffness about the normal, N m^2.
+    ei_ref: T,
+}
+
+impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarRod<'a, T, A, NODES> {
+    /// The planar equations of `model` in `plane` (sections as in [`PlanarSection`]) under `load`.
+    pub(crate) fn new(
+        model: &'a Model<T, A, NODES>,
+        plane: Plane<T>,
+        sections: &'a [PlanarSection<T>],
+        load: &TipLoad<T>,
+        alpha: T,
+    ) -> Self {
+        let base = model.rod().base_orientation;
+        Self {
+            model,
+            plane,
+            sections,
+            load: *load,
+            alpha,
+            kirchhoff: model.rod().strain_model == StrainModel::Kirchhoff,
+            local_normal: base.tr_mul(&plane.normal),
+            basis: Matrix3::from_rows(&[
+                plane.e1.transpose(),
+                plane.e2.transpose(),
+                plane.normal.transpose(),
+            ]) * base,
+            ei_ref: sections
+                .iter()
+                .fold(T::max_value().unwrap_or_else(T::one), |m, s| m.min(s.0)),
+        }
+    }
+
+    /// The normal in the base's local frame: the base strain of an in-plane equilibrium is this
+    /// times `k(0)`.
+    pub(crate) fn local_normal(&self) -> Vector3<T> {
+        self.local_normal
+    }
+
+    fn project(&self, v: &Vector3<T>) -> Vector2<T> {
+        Vector2::new(v.dot(&self.plane.e1), v.dot(&self.plane.e2))
+    }
+
+    fn in_space(&self, r: &Vector2<T>) -> Vector3<T> {
+        self.plane.e1 * r.x + self.plane.e2 * r.y
+    }
+
+    /// The 3D frame for a planar direction `t`: the base frame turned about the normal.
+    fn frame(&self, t: &Vector2<T>) -> Matrix3<T> {
+        let (e1, e2, n) = (self.plane.e1, self.plane.e2, self.plane.normal);
+        Matrix3::from_columns(&[e1 * t.x + e2 * t.y, e2 * t.x - e1 * t.y, n]) * self.basis
+    }
+}
+
+#[inline]
+fn perp<T: Scalar>(v: &Vector2<T>) -> Vector2<T> {
+    Vector2::new(-v.y, v.x)
+}
+
+#[inline]
+fn cross2<T: Scalar>(a: &Vector2<T>, b: &Vector2<T>) -> T {
+    a.x * b.y - a.y * b.x
+}
+
+/// The planar state: position relative to the base (high and low parts), direction, curvature.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct State<T: Scalar> {
+    r: Vector2<T>,
+    r_lo: Vector2<T>,
+    t: Vector2<T>,
+    k: T,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rates<T: Scalar> {
+    r: Vector2<T>,
+    t: Vector2<T>,
+    k: T,
+}
+
+/// A tangent `(dr, dt, dk)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tangent<T: Scalar> {
+    r: Vector2<T>,
+    t: Vector2<T>,
+    k: T,
+}
+
+impl<T: Scalar> Linear<T> for Tangent<T> {
+    #[inline]
+    fn zero() -> Self {
+        Self {
+            r: Vector2::zeros(),
+            t: Vector2::zeros(),
+            k: T::zero(),
+        }
+    }
+
+    #[inline]
+    fn axpy(&self, k: &Self, h: T) -> Self {
+        Self {
+            r: self.r + k.r * h,
+            t: self.t + k.t * h,
+            k: self.k + k.k * h,
+        }
+    }
+
+    #[inline]
+    fn rk4(&self, k: &[Self; 4], h: T) -> Self {
+        let (w1, w2) = (h / T::lit(6.0), h / T::lit(3.0));
+        let [k1, k2, k3, k4] = k;
+        Self {
+            r: self.r + (k1.r + k4.r) * w1 + (k2.r + k3.r) * w2,
+            t: self.t + (k1.t + k4.t) * w1 + (k2.t + k3.t) * w2,
+            k: self.k + (k1.k + k4.k) * w1 + (k2.k + k3.k) * w2,
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        self.r.iter().chain(self.t.iter()).all(|x| x.is_finite()) && self.k.is_finite()
+    }
+}
+
+/// What a tangent's rate needs from one stage.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Stage<T: Scalar> {
+    t: Vector2<T>,
+    n: Vector2<T>,
+    vt: T,
+    vn: T,
+    k: T,
+}
+
+/// One interval's coefficients: bending, shear and axial compliance, and the force field
+/// `n(s) = n_end + g_lambda (s1 - s)`.
+#[derive(Debug)]
+pub(crate) struct Field<T: Scalar> {
+    ei: T,
+    ga_inv: T,
+    ea_inv: T,
+    n_end: Vector2<T>,
+    g_lambda: Vector2<T>,
+    s1: T,
+    kirchhoff: bool,
+}
+
+impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
+    for PlanarRod<'a, T, A, NODES>
+{
+    type State = State<T>;
+    type Rate = Rates<T>;
+    type Stage = Stage<T>;
+    type Tangent = Tangent<T>;
+    type Seed = ();
+    type Field = Field<T>;
+    type Track = ();
+
+    fn grid(&self) -> Grid<'_, T> {
+        self.model.grid()
+    }
+
+    fn length_m(&self) -> T {
+        self.model.length_m()
+    }
+
+    fn at_scale(&self, load_scale: T) -> Self {
+        Self {
+            alpha: load_scale,
+            ..*self
+        }
+    }
+
+    /// The 3D small-deflection base strain about the normal.
+    fn guess(&self) -> SVector<T, 1> {
+        let m0 = straight_base_moment(self.model, &self.load, self.alpha);
+        let c_inv = self
+            .model
+            .base_compliance()
+            .map_or(Vector3::zeros(), |c| c.c_inv);
+        let u0 = c_inv.component_mul(&self.model.rod().base_orientation.tr_mul(&m0));
+        SVector::<T, 1>::new(u0.dot(&self.local_normal))
+    }
+
+    fn start(&self, x: &SVector<T, 1>) -> State<T> {
+        State {
+            r: Vector2::zeros(),
+            r_lo: Vector2::zeros(),
+            t: Vector2::new(T::one(), T::zero()),
+            k: x[0],
+        }
+    }
+
+    /// `k(0)`'s tangent starts as `dk = 1`. The reduction carries no tip-force tangents.
+    fn seed(&self, family: Family, _j: usize) -> (Tangent<T>, ()) {
+        match family {
+            Family::Unknown => (
+                Tangent {
+                    k: T::one(),
+                    ..Tangent::zero()
+                },
+                (),
+            ),
+            Family::TipForce => (Tangent::zero(), ()),
+        }
+    }
+
+    fn no_seed(&self) {}
+
+    fn blank_stage(&self) -> Stage<T> {
+        Stage {
+            t: Vector2::zeros(),
+            n: Vector2::zeros(),
+            vt: T::zero(),
+            vn: T::zero(),
+            k: T::zero(),
+        }
+    }
+
+    fn field(&self, interval: &Interval<T>) -> Option<Field<T>> {
+        let &(ei, ga_inv, ea_inv) = self.sections.get(usize::from(interval.section))?;
+        let tip_force = self.project(&self.load.force_n);
+        let g = self.project(&self.model.rod().gravity_m_s2);
+        Some(Field {
+            ei,
+            ga_inv,
+            ea_inv,
+            n_end: (tip_force + self.project(&interval.distal_force_n)) * self.alpha,
+            g_lambda: g * (interval.line_density_kg_per_m * self.alpha),
+            s1: interval.s1_m,
+            kirchhoff: self.kirchhoff,
+        })
+    }
+
+    #[inline]
+    fn rate(&self, f: &Field<T>, s: T, y: &State<T>, record: Option<&mut Stage<T>>) -> Rates<T> {
+        let n = f.n_end + f.g_lambda * (f.s1 - s);
+        let np = perp(&y.t);
+        let (vt, vn) = if f.kirchhoff {
+            (T::one(), T::zero())
+        } else {
+            (T::one() + n.dot(&y.t) * f.ea_inv, n.dot(&np) * f.ga_inv)
+        };
+        let r = y.t * vt + np * vn;
+        if let Some(stage) = record {
+            *stage = Stage {
+                t: y.t,
+                n,
+                vt,
+                vn,
+                k: y.k,
+            };
+        }
+        Rates {
+            r,
+            t: np * y.k,
+            k: -cross2(&r, &n) / f.ei,
+        }
+    }
+
+    #[inline]
+    fn advance(y: &State<T>, k: &Rates<T>, h: T) -> State<T> {
+        State {
+            r: y.r + k.r * h,
+            r_lo: y.r_lo,
+            t: y.t + k.t * h,
+            k: y.k + k.k * h,
+        }
+    }
+
+    #[inline]
+    fn combine(y: &State<T>, k: [&Rates<T>; 4], h: T) -> State<T> {
+        let [k1, k2, k3, k4] = k;
+        let (w1, w2) = (h / T::lit(6.0), h / T::lit(3.0));
+        let (r, lo) = compensated_add(&y.r, &((k1.r + k4.r) * w1 + (k2.r + k3.r) * w2));
+        State {
+            r,
+            r_lo: y.r_lo + lo,
+            t: y.t + (k1.t + k4.t) * w1 + (k2.t + k3.t) * w2,
+            k: y.k + (k1.k + k4.k) * w1 + (k2.k + k3.k) * w2,
+        }
+    }
+
+    #[inline]
+    fn tangent_rate(&self, f: &Field<T>, st: &Stage<T>, _: &(), t: &Tangent<T>) -> Tangent<T> {
+        let np = perp(&st.t);
+        let dnp = perp(&t.t);
+        let (dvt, dvn) = if f.kirchhoff {
+            (T::zero(), T::zero())
+        } else {
+            (st.n.dot(&t.t) * f.ea_inv, st.n.dot(&dnp) * f.ga_inv)
+        };
+        let dr = t.t * st.vt + st.t * dvt + dnp * st.vn + np * dvn;
+        Tangent {
+            r: dr,
+            t: np * t.k + dnp * st.k,
+            k: -cross2(&dr, &st.n) / f.ei,
+        }
+    }
+
+    /// Keeps the direction a unit vector; its tangents stay perpendicular to it.
+    #[inline]
+    fn after_step(&self, y: &mut State<T>, tangents: &mut [Tangent<T>]) {
+        let norm = y.t.norm_squared().sqrt_hot();
+        y.t /= norm;
+        for t in tangents.iter_mut() {
+            t.t -= y.t * y.t.dot(&t.t);
+        }
+    }
+
+    /// A change of stiffness or a point moment about the normal: `k+ = (E I- k- - tau) / E I+`.
+    fn node(
+        &self,
+        node: &Node<T>,
+        proximal: &Field<T>,
+        distal: &Field<T>,
+        y: &mut State<T>,
+        tangents: &mut [Tangent<T>],
+    ) {
+        let tau = node.moment_nm.dot(&self.plane.normal) * self.alpha;
+        if proximal.ei != distal.ei || tau != T::zero() {
+            y.k = (proximal.ei * y.k - tau) / distal.ei;
+            for t in tangents.iter_mut() {
+                t.k = proximal.ei * t.k / distal.ei;
+            }
+        }
+    }
+
+    /// `E I k(L) - tau`, `tau` the tip moment and the tip node's point moments about the normal.
+    fn tip(
+        &self,
+        node: Option<&Node<T>>,
+        last: &Field<T>,
+        y: &State<T>,
+        tangents: &[Tangent<T>],
+        _: &[()],
+        d: &mut [SVector<T, 1>],
+    ) -> SVector<T, 1> {
+        let normal = &self.plane.normal;
+        let tip_moment =
+            node.map_or(T::zero(), |n| n.moment_nm.dot(normal)) + self.load.moment_nm.dot(normal);
+        for (e, t) in d.iter_mut().zip(tangents) {
+            *e = SVector::<T, 1>::new(last.ei * t.k);
+        }
+        SVector::<T, 1>::new(last.ei * y.k - tip_moment * self.alpha)
+    }
+
+    fn pose(&self, y: &State<T>) -> Pose<T> {
+        Pose {
+            position_m: self.model.rod().base_position_m + self.in_space(&y.r),
+            position_lo_m: self.in_space(&y.r_lo),
+            rotation: self.frame(&y.t),
+        }
+    }
+
+    fn tangent_pose(&self, y: &State<T>, t: &Tangent<T>) -> (Vector3<T>, Vector3<T>) {
+        (self.in_space(&t.r), self.local_normal * cross2(&y.t, &t.t))
+    }
+
+    fn shape_point(&self, s: T, y: &State<T>, _: &Field<T>) -> ShapePoint<T> {
+        let frame = self.frame(&y.t);
+        let pose = self.pose(y);
+        ShapePoint {
+            s_m: s,
+            position_m: pose.position_m + pose.position_lo_m,
+            rotation: frame,
+            strain_per_m: frame.tr_mul(&self.plane.normal) * y.k,
+        }
+    }
+
+    fn finite(&self, y: &State<T>, tangents: &[Tangent<T>]) -> bool {
+        y.r.iter().chain(y.t.iter()).all(|x| x.is_finite())
+            && y.k.is_finite()
+            && tangents.iter().all(Linear::is_finite)
+    }
+
+    fn has_stability_test(&self) -> bool {
+        true
+    }
+
+    fn conservative(&self) -> bool {
+        self.model.conservative(&self.load.moment_nm)
+    }
+
+    fn track(&self) {}
+
+    /// The in-plane Jacobi field: the turn of the direction per unit `dk(0)` must stay positive.
+    fn crosses(
+        &self,
+        _: &mut (),
+        y: &State<T>,
+        tangents: &[Tangent<T>],
+        _: &Field<T>,
+        _: T,
+    ) -> bool {
+        tangents
+            .first()
+            .is_some_and(|t| cross2(&y.t, &t.t) <= T::zero())
+    }
+
+    fn jacobi_rotation(&self, d_rotation: &Vector3<T>) -> SVector<T, 1> {
+        SVector::<T, 1>::new(d_rotation.dot(&self.local_normal))
+    }
+
+    fn residual_size(&self, r: &SVector<T, 1>) -> T {
+        r[0].abs() / (self.ei_ref / self.model.length_m())
+    }
+}

@@ -1,0 +1,163 @@
+//! Solving any rod equations for their `K` shooting unknowns: one damped Newton/LM (`newton.rs`), one
+//! load continuation (`continuation.rs`), the stopping rules (`stopping.rs`) and the strategy of a
+//! solve (here): a cold start first tries Newton from the small-deflection guess and keeps the answer
+//! only if the stability test passes; otherwise it ramps all loads from zero, which follows the branch
+//! connected to the unloaded rod. A converged but unstable equilibrium is reported as
+//! [`Termination::Unstable`], never as success. Equations without a stability test go straight to
+//! the continuation from a cold start.
+
+pub(crate) mod continuation;
+pub(crate) mod newton;
+pub(crate) mod stopping;
+
+use nalgebra::{Const, DimMin, SMatrix, SVector};
+
+use crate::Scalar;
+use crate::ode::{Family, RodOde};
+use crate::report::{MAX_FRAME_DRIFT, Termination};
+use crate::shooting::ShootingSettings;
+use crate::stability::{Stability, classify};
+use crate::sweep::{Sweep, TangentSet};
+use newton::{Newton, NewtonOptions, Work, newton};
+
+/// A cold start's first guess is the small-deflection one with its base rotation `|x| L` capped at
+/// this angle, rad (the true rotation grows more slowly than the linear estimate).
+const GUESS_ANGLE_RAD: f64 = 2.5;
+
+/// Newton iterations a cold start gives the full load before it falls back to continuation.
+const DIRECT_ITERATIONS: u16 = 12;
+
+/// The stability verdict on the sweep `sw` of `ode`, which carried the unknowns' tangents with the
+/// conjugate-point watch.
+pub(crate) fn verdict<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    sw: &Sweep<T, K>,
+) -> Stability<T>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    if !ode.has_stability_test() {
+        return Stability::Unchecked;
+    }
+    let rotation = SMatrix::<T, K, K>::from_fn(|i, j| {
+        ode.jacobi_rotation(&sw.d_rotation(Family::Unknown, j))[i]
+    });
+    classify(
+        ode.conservative(),
+        sw.conjugate_point_m,
+        &sw.jacobian(),
+        &rotation,
+        ode.length_m(),
+    )
+}
+
+/// A finished solve: its last Newton solve, the stability verdict, the work and load steps.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Solved<T, const K: usize> {
+    pub newton: Newton<T, K>,
+    pub stability: Stability<T>,
+    pub work: Work,
+    pub load_steps: u16,
+}
+
+/// A solve that ended without any Newton solve to show (no direct attempt, and the continuation
+/// failed): its work.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Failed {
+    pub work: Work,
+    pub load_steps: u16,
+}
+
+/// Solves `ode` (at its full load) from `start` (`None`: cold).
+pub(crate) fn solve<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    start: Option<SVector<T, K>>,
+    settings: &ShootingSettings<T>,
+) -> Result<Solved<T, K>, Failed>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    let mut work = Work::default();
+    let mut load_steps = 0u16;
+    let length = ode.length_m();
+
+    // A cold start tries the full load from the capped small-deflection guess; if that fails, load
+    // continuation starts with a step that bends the linear rod by about the same angle.
+    let (direct_start, direct_iterations, first_step) = match start {
+        None => {
+            let guess = ode.guess();
+            let angle = guess.norm() * length;
+            let limit = T::lit(GUESS_ANGLE_RAD);
+            let scale = if angle > limit {
+                limit / angle
+            } else {
+                T::one()
+            };
+            (
+                guess * scale,
+                settings.max_iterations.min(DIRECT_ITERATIONS),
+                scale.min(T::lit(0.5)),
+            )
+        }
+        Some(x) => (x, settings.max_iterations, T::lit(0.25)),
+    };
+    let check = |out: &mut Newton<T, K>| {
+        if out.termination.is_success() && settings.check_stability {
+            let verdict = verdict(ode, &out.sweep);
+            if !verdict.is_acceptable() {
+                out.termination = Termination::Unstable;
+            }
+            verdict
+        } else {
+            Stability::Unchecked
+        }
+    };
+    // Without a stability test a direct solve cannot tell a wrong branch from the right one: a cold
+    // start then follows the branch from the unloaded rod.
+    let direct = start.is_some() || ode.has_stability_test();
+    let mut result = direct.then(|| {
+        let options = NewtonOptions {
+            tolerance: settings.tolerance,
+            to_rounding: true,
+            max_step_rad: settings.max_rotation_step_rad,
+            max_iterations: direct_iterations,
+            tangents: TangentSet::unknowns(settings.check_stability),
+        };
+        let mut out = newton(ode, direct_start, None, &options, &mut work);
+        let stability = check(&mut out);
+        (out, stability)
+    });
+    let cold_allowed = start.is_none() || settings.cold_fallback;
+    let succeeded = result
+        .as_ref()
+        .is_some_and(|(out, _)| out.termination.is_success());
+    if !succeeded && cold_allowed {
+        result =
+            match continuation::continuation(ode, settings, first_step, &mut work, &mut load_steps)
+            {
+                Some(mut out) => {
+                    let stability = check(&mut out);
+                    Some((out, stability))
+                }
+                None => result.map(|(mut out, stability)| {
+                    out.termination = Termination::ContinuationFailed;
+                    (out, stability)
+                }),
+            };
+    }
+    let Some((mut newton, stability)) = result else {
+        return Err(Failed { work, load_steps });
+    };
+    if newton.termination.is_success()
+        && !(newton.sweep.frame_drift.is_finite()
+            && newton.sweep.frame_drift <= T::lit(MAX_FRAME_DRIFT))
+    {
+        newton.termination = Termination::FrameDrift;
+    }
+    Ok(Solved {
+        newton,
+        stability,
+        work,
+        load_steps,
+    })
+}

@@ -1,0 +1,215 @@
+//! One damped Newton / Levenberg-Marquardt iteration for the `K` shooting unknowns of any rod
+//! equations: the Newton step when it reduces the residual (`mu = 0`), a damped step
+//! `(J^T J + mu diag(J^T J)) dx = -J^T e` when it does not, with a trust region on the base rotation
+//! `|dx| L`. The Jacobian comes from the sweep's tangents of the unknowns.
+
+use nalgebra::{Const, DimMin, SMatrix, SVector};
+
+use super::stopping;
+use crate::Scalar;
+use crate::ode::RodOde;
+use crate::report::Termination;
+use crate::sweep::{Sweep, TangentSet, sweep};
+
+/// Work counters shared by the stages of one solve.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Work {
+    pub iterations: u16,
+    pub sweeps: u16,
+}
+
+impl Work {
+    pub(crate) fn sweep(&mut self) {
+        self.sweeps = self.sweeps.saturating_add(1);
+    }
+}
+
+/// How one Newton solve runs and when it stops.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct NewtonOptions<T> {
+    /// Tolerance on the residual's size (see [`RodOde::residual_size`]).
+    pub tolerance: T,
+    /// Whether the tolerance is relative to the base rotation beyond one radian and a negligible
+    /// correction at the rounding floor ends the solve (a forward solve to the scalar type's
+    /// precision), or the tolerance is absolute and only the residual ends it (a projection back onto
+    /// the equilibrium, to a tolerance far above rounding).
+    pub to_rounding: bool,
+    /// Trust region: largest change of the unknowns per iteration, as a base rotation, rad.
+    pub max_step_rad: T,
+    /// Iterations (each one trial sweep).
+    pub max_iterations: u16,
+    /// The tangents each sweep carries (at least the unknowns').
+    pub tangents: TangentSet,
+}
+
+/// Rejected steps tolerated in a row before the solve is declared stalled.
+const MAX_REJECTIONS: u8 = 8;
+
+/// The outcome of one Newton solve at a fixed load scale.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Newton<T, const K: usize> {
+    pub x: SVector<T, K>,
+    pub sweep: Sweep<T, K>,
+    /// The residual's size at `x`.
+    pub residual: T,
+    pub termination: Termination,
+}
+
+/// Damped Newton on the unknowns of `ode` from `start`; `first` is the sweep at `start` when the
+/// caller has it already.
+pub(crate) fn newton<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    start: SVector<T, K>,
+    first: Option<Sweep<T, K>>,
+    options: &NewtonOptions<T>,
+    work: &mut Work,
+) -> Newton<T, K>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    let run = |x: &SVector<T, K>, work: &mut Work| {
+        work.sweep();
+        sweep(ode, x, options.tangents, None)
+    };
+    let mut x = start;
+    let mut sw = match first {
+        Some(sw) => sw,
+        None => run(&x, work),
+    };
+    if !sw.finite {
+        return Newton {
+            x,
+            sweep: sw,
+            residual: T::zero(),
+            termination: Termination::NonFinite,
+        };
+    }
+    let length = ode.length_m();
+    let tolerance = options.tolerance;
+    let converged = |sw: &Sweep<T, K>, x: &SVector<T, K>| {
+        let size = ode.residual_size(&sw.residual);
+        if options.to_rounding {
+            stopping::residual_converged(size, x.norm() * length, tolerance)
+        } else {
+            size <= tolerance
+        }
+    };
+    let mut residual = ode.residual_size(&sw.residual);
+    let max_step = options.max_step_rad / length;
+    let mut mu = T::zero();
+    let mut rejections = 0u8;
+    for _ in 0..options.max_iterations {
+        if converged(&sw, &x) {
+            return Newton {
+                x,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
+        }
+        let jacobian = sw.jacobian();
+        let step: Option<SVector<T, K>> = if mu == T::zero() {
+            jacobian.lu().solve::<Const<K>, Const<1>, _>(&-sw.residual)
+        } else {
+            let jtj = jacobian.tr_mul(&jacobian);
+            let damped = jtj + SMatrix::<T, K, K>::from_diagonal(&jtj.diagonal()) * mu;
+            damped.cholesky().map(|c| {
+                let gradient = jacobian.tr_mul::<Const<K>, Const<1>, _>(&sw.residual);
+                c.solve::<Const<K>, Const<1>, _>(&-gradient)
+            })
+        };
+        let Some(mut step) = step.filter(|d| d.iter().all(|x| x.is_finite())) else {
+            if mu == T::zero() {
+                mu = T::lit(1e-3);
+                continue;
+            }
+            return Newton {
+                x,
+                sweep: sw,
+                residual,
+                termination: Termination::Singular,
+            };
+        };
+        // At the rounding floor the residual stops decreasing. A Newton correction that turns the base
+        // and moves the tip by less than the tolerance may mean the answer is as good as the scalar
+        // type allows: it is when the tip move is negligible outright, or when the correction, tried,
+        // no longer lowers the residual. On a badly conditioned rod a correction that small can still
+        // lower the residual a hundredfold and move the tip by a tenth of a millimetre.
+        let tip_move = sw.tip_move_m(&step);
+        let at_floor = options.to_rounding
+            && mu == T::zero()
+            && stopping::step_negligible(
+                step.norm() * length,
+                x.norm() * length,
+                tip_move,
+                length,
+                tolerance,
+            );
+        if at_floor && stopping::tip_move_negligible(tip_move, length, tolerance) {
+            return Newton {
+                x,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
+        }
+        let norm = step.norm();
+        if norm > max_step {
+            step *= max_step / norm;
+        }
+        work.iterations = work.iterations.saturating_add(1);
+        let trial_x = x + step;
+        let trial = run(&trial_x, work);
+        let trial_residual = if trial.finite {
+            ode.residual_size(&trial.residual)
+        } else {
+            residual
+        };
+        if trial.finite && trial_residual < residual {
+            (x, sw, residual) = (trial_x, trial, trial_residual);
+            mu *= T::lit(0.25);
+            if mu < T::lit(1e-6) {
+                mu = T::zero();
+            }
+            rejections = 0;
+        } else if at_floor {
+            return Newton {
+                x,
+                sweep: sw,
+                residual,
+                termination: Termination::Converged,
+            };
+        } else {
+            mu = if mu == T::zero() {
+                T::lit(1e-3)
+            } else {
+                mu * T::lit(8.0)
+            };
+            rejections += 1;
+            if rejections >= MAX_REJECTIONS {
+                let termination = if converged(&sw, &x) {
+                    Termination::Converged
+                } else {
+                    Termination::Stalled
+                };
+                return Newton {
+                    x,
+                    sweep: sw,
+                    residual,
+                    termination,
+                };
+            }
+        }
+    }
+    let termination = if converged(&sw, &x) {
+        Termination::Converged
+    } else {
+        Termination::IterationLimit
+    };
+    Newton {
+        x,
+        sweep: sw,
+        residual,
+        termination,
+    }
+}

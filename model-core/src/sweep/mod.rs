@@ -1,0 +1,343 @@
+//! One fixed-step sweep from base to tip over the plan, for any rod equations ([`RodOde`]), with
+//! forward sensitivities and observers.
+//!
+//! The sweep walks the plan's intervals with the RK4 stepper (`rk4.rs`); at each node the equations
+//! apply their jump (section change, point loads and moments, loads that read the shape), and the
+//! observers look at the pose: the cable traces (`cables.rs`), the shape points asked for
+//! (`crate::shape`), the frame's drift from a rotation, and after every step the conjugate-point
+//! watch (`crate::stability`). At the tip the equations give the residual of the tip condition.
+//!
+//! Alongside the state the sweep can carry up to [`MAX_TANGENTS`] tangents, by family (the shooting
+//! unknowns, then the tip force). The tangent count is a run-time number, so each set of equations
+//! has one compiled sweep (the firmware's flash is small), and a plain sweep pays nothing for
+//! tangents.
+
+pub(crate) mod cables;
+pub(crate) mod rk4;
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use crate::kinematics::orthonormality_error;
+use crate::ode::{Family, Linear, Pose, RodOde};
+use crate::plan::Node;
+use crate::shape::ShapeSink;
+use crate::{MAX_CABLES, Scalar};
+use cables::CableTraces;
+
+/// Most tangent directions a sweep carries.
+pub(crate) const MAX_TANGENTS: usize = 6;
+
+/// Which tangents a sweep carries: the shooting unknowns' (a Newton iteration, the stability test),
+/// and after them the tip force's (the inverse), and whether to watch for conjugate points (which
+/// needs the unknowns').
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TangentSet {
+    unknowns: bool,
+    tip_force: bool,
+    track_stability: bool,
+}
+
+impl TangentSet {
+    /// A plain sweep.
+    pub const NONE: Self = Self {
+        unknowns: false,
+        tip_force: false,
+        track_stability: false,
+    };
+
+    /// The unknowns' tangents.
+    pub fn unknowns(track_stability: bool) -> Self {
+        Self {
+            unknowns: true,
+            tip_force: false,
+            track_stability,
+        }
+    }
+
+    /// The unknowns' and the tip force's tangents.
+    pub fn with_tip_force(track_stability: bool) -> Self {
+        Self {
+            unknowns: true,
+            tip_force: true,
+            track_stability,
+        }
+    }
+
+    /// How many slots, for `K` unknowns (at most [`MAX_TANGENTS`]).
+    fn count<const K: usize>(&self) -> usize {
+        let n = if self.unknowns { K } else { 0 } + if self.tip_force { 3 } else { 0 };
+        n.min(MAX_TANGENTS)
+    }
+
+    /// The family and index of slot `j`.
+    fn family<const K: usize>(j: usize) -> (Family, usize) {
+        if j < K {
+            (Family::Unknown, j)
+        } else {
+            (Family::TipForce, j - K)
+        }
+    }
+}
+
+/// Everything one sweep produces. Tangent arrays hold [`Sweep::tangents`] valid entries, by family:
+/// the `K` unknowns first, then the tip force's three.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sweep<T, const K: usize> {
+    pub tip_position_m: Vector3<T>,
+    pub tip_rotation: nalgebra::Matrix3<T>,
+    /// The tip condition's residual: zero when it holds.
+    pub residual: SVector<T, K>,
+    d_residual: [SVector<T, K>; MAX_TANGENTS],
+    pub cable_m: [T; MAX_CABLES],
+    d_cable: [[T; MAX_TANGENTS]; MAX_CABLES],
+    d_tip_position: [Vector3<T>; MAX_TANGENTS],
+    /// Tip rotation perturbation, body frame.
+    d_tip_rotation: [Vector3<T>; MAX_TANGENTS],
+    /// How many tangents the arrays hold.
+    tangents: usize,
+    /// First arc length where a conjugate point was found (only when tracked).
+    pub conjugate_point_m: Option<T>,
+    /// Largest `|R^T R - I|` met at the nodes.
+    pub frame_drift: T,
+    pub finite: bool,
+}
+
+impl<T: Scalar, const K: usize> Sweep<T, K> {
+    fn non_finite() -> Self {
+        Self {
+            tip_position_m: Vector3::zeros(),
+            tip_rotation: nalgebra::Matrix3::identity(),
+            residual: SVector::zeros(),
+            d_residual: [SVector::zeros(); MAX_TANGENTS],
+            cable_m: [T::zero(); MAX_CABLES],
+            d_cable: [[T::zero(); MAX_TANGENTS]; MAX_CABLES],
+            d_tip_position: [Vector3::zeros(); MAX_TANGENTS],
+            d_tip_rotation: [Vector3::zeros(); MAX_TANGENTS],
+            tangents: 0,
+            conjugate_point_m: None,
+            frame_drift: T::zero(),
+            finite: false,
+        }
+    }
+
+    /// The slot of tangent `j` of `family`, if the sweep carried it.
+    fn slot(&self, family: Family, j: usize) -> Option<usize> {
+        let slot = match family {
+            Family::Unknown => (j < K).then_some(j),
+            Family::TipForce => (j < 3).then_some(K + j),
+        }?;
+        (slot < self.tangents).then_some(slot)
+    }
+
+    /// Tangent `j` of `family`'s change of the residual (zero when not carried).
+    pub fn d_residual(&self, family: Family, j: usize) -> SVector<T, K> {
+        self.slot(family, j)
+            .and_then(|j| self.d_residual.get(j))
+            .copied()
+            .unwrap_or_else(SVector::zeros)
+    }
+
+    /// Tangent `j` of `family`'s change of the tip rotation, body frame (zero when not carried).
+    pub fn d_rotation(&self, family: Family, j: usize) -> Vector3<T> {
+        self.slot(family, j)
+            .and_then(|j| self.d_tip_rotation.get(j))
+            .copied()
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j` of `family`'s change of the tip position (zero when not carried).
+    pub fn d_position(&self, family: Family, j: usize) -> Vector3<T> {
+        self.slot(family, j)
+            .and_then(|j| self.d_tip_position.get(j))
+            .copied()
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j` of `family`'s change of cable `c`'s length (zero when not carried).
+    pub fn d_cable_length(&self, c: usize, family: Family, j: usize) -> T {
+        self.slot(family, j)
+            .and_then(|j| self.d_cable.get(c).and_then(|row| row.get(j)))
+            .copied()
+            .unwrap_or_else(T::zero)
+    }
+
+    /// The shooting Jacobian `d residual / d unknowns`.
+    pub fn jacobian(&self) -> SMatrix<T, K, K> {
+        SMatrix::from_fn(|i, j| self.d_residual(Family::Unknown, j)[i])
+    }
+
+    /// The tip move a change `dx` of the unknowns predicts, m.
+    pub fn tip_move_m(&self, dx: &SVector<T, K>) -> T {
+        let mut moved = Vector3::zeros();
+        for (j, d) in dx.iter().enumerate() {
+            moved += self.d_position(Family::Unknown, j) * *d;
+        }
+        moved.norm()
+    }
+}
+
+/// The observers at a node, after the equations' jump there: each tangent's change of the pose
+/// (into `d_pose`), the cable holes, and the frame's drift from a rotation. Returns the pose.
+/// Out of line: the tip and every interior node share it.
+#[inline(never)]
+fn observe<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    node: Option<&Node<T>>,
+    y: &O::State,
+    tangents: &[O::Tangent],
+    cables: &mut CableTraces<T>,
+    d_pose: &mut [(Vector3<T>, Vector3<T>); MAX_TANGENTS],
+    frame_drift: &mut T,
+) -> Pose<T> {
+    let pose = ode.pose(y);
+    for (d, t) in d_pose.iter_mut().zip(tangents) {
+        *d = ode.tangent_pose(y, t);
+    }
+    if let Some(node) = node {
+        let d_pose = d_pose.get(..tangents.len()).unwrap_or(&[]);
+        cables.visit(node, ode.grid().cable_offsets, &pose, d_pose);
+    }
+    *frame_drift = frame_drift.max(orthonormality_error(&pose.rotation));
+    pose
+}
+
+/// Integrates `ode` from base to tip at unknowns `x` with the tangents `which`, writing shape points
+/// into `shape` when given.
+pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    x: &SVector<T, K>,
+    which: TangentSet,
+    mut shape: Option<&mut ShapeSink<'_, T>>,
+) -> Sweep<T, K> {
+    let mut out = Sweep::non_finite();
+    let grid = ode.grid();
+    let count = which.count::<K>();
+    let mut seeds = [ode.no_seed(); MAX_TANGENTS];
+    let mut tan = [O::Tangent::zero(); MAX_TANGENTS];
+    for (j, (t, seed)) in tan.iter_mut().zip(seeds.iter_mut()).enumerate().take(count) {
+        let (family, index) = TangentSet::family::<K>(j);
+        (*t, *seed) = ode.seed(family, index);
+    }
+    let (seeds, tan) = (
+        seeds.get(..count).unwrap_or(&[]),
+        tan.get_mut(..count).unwrap_or(&mut []),
+    );
+    let mut y = ode.start(x);
+    let mut cables = CableTraces::new();
+    let mut d_pose = [(Vector3::zeros(), Vector3::zeros()); MAX_TANGENTS];
+    let mut conjugate_point_m = None;
+    let mut frame_drift = T::zero();
+    let mut stages = [ode.blank_stage(); 4];
+    let mut track = ode.track();
+    let mut proximal: Option<O::Field> = None;
+
+    for (k, interval) in grid.intervals.iter().enumerate() {
+        let Some(field) = ode.field(interval) else {
+            return out;
+        };
+        let node = grid.nodes.get(k);
+        if let (Some(node), Some(prox)) = (node, &proximal) {
+            ode.node(node, prox, &field, &mut y, tan);
+        }
+        observe(
+            ode,
+            node,
+            &y,
+            tan,
+            &mut cables,
+            &mut d_pose,
+            &mut frame_drift,
+        );
+        let (s0, len) = (interval.s0_m, interval.s1_m - interval.s0_m);
+        let steps = T::lit(f64::from(interval.steps));
+        let mut s = s0;
+        for i in 1..=interval.steps {
+            let s_next = if i == interval.steps {
+                interval.s1_m
+            } else {
+                s0 + len * (T::lit(f64::from(i)) / steps)
+            };
+            if let Some(sink) = shape.as_deref_mut() {
+                while let Some(q) = sink.next_query().filter(|q| *q < s_next) {
+                    let mut at_q = if q > s {
+                        rk4::step(ode, &field, s, q - s, &y, None)
+                    } else {
+                        y
+                    };
+                    ode.after_step(&mut at_q, &mut []);
+                    sink.write(ode.shape_point(q, &at_q, &field));
+                }
+            }
+            let h = s_next - s;
+            if tan.is_empty() {
+                y = rk4::step(ode, &field, s, h, &y, None);
+            } else {
+                y = rk4::step(ode, &field, s, h, &y, Some(&mut stages));
+                for (t, seed) in tan.iter_mut().zip(seeds) {
+                    *t = rk4::tangent_step(ode, &field, &stages, seed, h, t);
+                }
+            }
+            ode.after_step(&mut y, tan);
+            if which.track_stability
+                && conjugate_point_m.is_none()
+                && ode.crosses(&mut track, &y, tan, &field, len / steps)
+            {
+                conjugate_point_m = Some(s_next);
+            }
+            s = s_next;
+        }
+        if !ode.finite(&y, tan) {
+            return out;
+        }
+        proximal = Some(field);
+    }
+
+    // The tip node: last guide holes and terminations, remaining shape queries, the tip condition.
+    let Some(last) = proximal else {
+        return out;
+    };
+    let tip_node = grid.nodes.last();
+    let pose = observe(
+        ode,
+        tip_node,
+        &y,
+        tan,
+        &mut cables,
+        &mut d_pose,
+        &mut frame_drift,
+    );
+    if let Some(sink) = shape {
+        let length = ode.length_m();
+        while sink.next_query().is_some_and(|q| q <= length) {
+            sink.write(ode.shape_point(length, &y, &last));
+        }
+    }
+    out.residual = ode.tip(
+        tip_node,
+        &last,
+        &y,
+        tan,
+        seeds,
+        out.d_residual.get_mut(..count).unwrap_or(&mut []),
+    );
+    cables.write(&mut out.cable_m, &mut out.d_cable);
+    for ((r, th), (dr, dth)) in out
+        .d_tip_position
+        .iter_mut()
+        .zip(out.d_tip_rotation.iter_mut())
+        .zip(d_pose.iter().take(count))
+    {
+        *r = *dr;
+        *th = *dth;
+    }
+    out.tip_position_m = pose.position_m + pose.position_lo_m;
+    out.tip_rotation = pose.rotation;
+    out.tangents = count;
+    out.conjugate_point_m = conjugate_point_m;
+    out.frame_drift = frame_drift;
+    out.finite = crate::scalar::all_finite(&out.residual)
+        && out.cable_m.iter().all(|x| x.is_finite())
+        && out.d_cable.iter().flatten().all(|x| x.is_finite())
+        && out.d_residual.iter().all(crate::scalar::all_finite);
+    out
+}
