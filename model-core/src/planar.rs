@@ -149,7 +149,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
             // nothing, so the answer gets the 3D test: one sweep with the Jacobi fields.
             solved.work.sweep();
             let full = DeadLoadRod::new(model, load, T::one());
-            let u0 = normal * solved.newton.x[0];
+            let u0 = normal * solved.newton.x.x;
             let swept = sweep(&full, &u0, TangentSet::unknowns(true), None);
             solved.stability = crate::solve::verdict(&full, &swept);
             if !solved.stability.is_acceptable() {

@@ -90,3 +90,15 @@ pub(crate) fn insertion_sort<T: Copy>(xs: &mut [T], before: impl Fn(&T, &T) -> b
         }
     }
 }
+
+/// The matrix whose column `j` is `column(j)`.
+#[inline]
+pub(crate) fn from_columns<T: Scalar, const R: usize, const C: usize>(
+    column: impl Fn(usize) -> nalgebra::SVector<T, R>,
+) -> nalgebra::SMatrix<T, R, C> {
+    let mut m = nalgebra::SMatrix::<T, R, C>::zeros();
+    for (j, mut c) in m.column_iter_mut().enumerate() {
+        c.copy_from(&column(j));
+    }
+    m
+}

@@ -3,11 +3,13 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
+#[cfg(feature = "identifiability")]
+use crate::MAX_CABLES;
+use crate::Scalar;
 use crate::error::{ModelError, finite_vec, positive};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::{MAX_CABLES, Scalar};
 
 /// The number of load parameters an estimate can have (1 to 3). nalgebra's singular value
 /// decomposition behind [`Quality`] needs a concrete size, so each is listed here.

@@ -22,6 +22,7 @@ use crate::model::Model;
 use crate::ode::Family;
 use crate::ode::dead_load::DeadLoadRod;
 use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
+use crate::scalar::from_columns;
 use crate::solve::newton::{NewtonOptions, Work, newton};
 use crate::solve::stopping;
 use crate::stability::{Stability, classify};
@@ -219,8 +220,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
 
     pub(super) fn linearize(&self, sw: &Sweep<T, 3>) -> Linearization<T, P> {
         let (u, f) = (Family::Unknown, Family::TipForce);
-        let j_eu = Matrix3::from_fn(|i, j| sw.d_residual(u, j)[i]);
-        let j_ef = Matrix3::from_fn(|i, j| sw.d_residual(f, j)[i]);
+        let j_eu = from_columns(|j| sw.d_residual(u, j));
+        let j_ef: Matrix3<T> = from_columns(|j| sw.d_residual(f, j));
         // e = C u - R^T tau: d e / d tau = -R^T.
         let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
         let cable = |c: usize, family: Family, j: usize| {
@@ -232,7 +233,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         };
         let j_cu = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, u, j));
         let j_cf = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, f, j));
-        let tip = |family: Family| Matrix3::from_fn(|i, j| sw.d_position(family, j)[i]);
+        let tip = |family: Family| -> Matrix3<T> { from_columns(|j| sw.d_position(family, j)) };
         Linearization {
             e: sw.residual,
             rc: self.cable_residual(sw),
@@ -244,7 +245,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             tip_rotation: sw.tip_rotation,
             d_tip_u: tip(u),
             d_tip_p: tip(f) * self.basis.force_n,
-            d_theta_tip_u: Matrix3::from_fn(|i, j| sw.d_rotation(u, j)[i]),
+            d_theta_tip_u: from_columns(|j| sw.d_rotation(u, j)),
             conjugate_point_m: sw.conjugate_point_m,
             frame_drift: sw.frame_drift,
         }

@@ -15,6 +15,7 @@ use nalgebra::{Const, DimMin, SMatrix, SVector};
 use crate::Scalar;
 use crate::ode::{Family, RodOde};
 use crate::report::{MAX_FRAME_DRIFT, Termination};
+use crate::scalar::from_columns;
 use crate::shooting::ShootingSettings;
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet};
@@ -39,9 +40,8 @@ where
     if !ode.has_stability_test() {
         return Stability::Unchecked;
     }
-    let rotation = SMatrix::<T, K, K>::from_fn(|i, j| {
-        ode.jacobi_rotation(&sw.d_rotation(Family::Unknown, j))[i]
-    });
+    let rotation: SMatrix<T, K, K> =
+        from_columns(|j| ode.jacobi_rotation(&sw.d_rotation(Family::Unknown, j)));
     classify(
         ode.conservative(),
         sw.conjugate_point_m,

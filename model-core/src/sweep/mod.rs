@@ -163,7 +163,7 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
 
     /// The shooting Jacobian `d residual / d unknowns`.
     pub fn jacobian(&self) -> SMatrix<T, K, K> {
-        SMatrix::from_fn(|i, j| self.d_residual(Family::Unknown, j)[i])
+        crate::scalar::from_columns(|j| self.d_residual(Family::Unknown, j))
     }
 
     /// The tip move a change `dx` of the unknowns predicts, m.
