@@ -17,8 +17,9 @@ use model_core::inverse::{
     ParamCount, Params, estimate,
 };
 use model_core::{
-    Cable, CrossSection, GuideMass, Material, Model, ModelError, PointLoad, Rod, Scalar, Section,
-    ShapePoint, ShootingSettings, Stability, Start, Stiffness, Termination, TipLoad,
+    Cable, CrossSection, GuideMass, Material, Model, ModelError, NoShapeLoad, PointLoad, Rod,
+    Scalar, Section, ShapePoint, ShootingSettings, Stability, Start, Stiffness, Termination,
+    TipLoad,
 };
 
 /// A failed check: what was measured against what limit.
@@ -372,6 +373,40 @@ pub fn golden_forward<T: Scalar>() -> Outcome {
         cable_err,
         tol::<T>(1e-6, 1e-5),
     )
+}
+
+/// The rod equations with the internal force and moment as states (the path of loads that read the
+/// shape), without such loads, land on the fast path's equilibrium on the golden rows: tip within
+/// 1e-10 m in f64 (50 um in f32), cable lengths within 1e-10 m (10 um).
+pub fn force_state_matches_dead_load<T: Scalar>() -> Outcome {
+    let model = ok(
+        "model",
+        Model::<T>::new(ok("bench", reference::golden_bench(100))?),
+    )?;
+    let (mut tip_gap, mut cable_gap) = (0.0f64, 0.0f64);
+    for row in reference::golden_rows() {
+        let row = ok("golden row", row)?;
+        let load = TipLoad::force(lit3(row.force_n));
+        let fast = solved(&model, &load)?;
+        let state = ok(
+            "solve input",
+            model.solve_with(&NoShapeLoad, &load, None, &ShootingSettings::default()),
+        )?;
+        holds(
+            "force-state solve converged",
+            state.report.termination.is_success(),
+        )?;
+        tip_gap = tip_gap.max(f64s(&(fast.tip_position_m - state.tip_position_m)).norm());
+        for (a, b) in fast
+            .cable_lengths_m
+            .iter()
+            .zip(state.cable_lengths_m.iter())
+        {
+            cable_gap = cable_gap.max((a.to_f64() - b.to_f64()).abs());
+        }
+    }
+    within("tip difference, m", tip_gap, tol::<T>(1e-10, 5e-5))?;
+    within("cable difference, m", cable_gap, tol::<T>(1e-10, 1e-5))
 }
 
 /// The inverse on the golden reference: from the three cable lengths alone, the tip within 0.1 mm and
@@ -893,7 +928,7 @@ where
 }
 
 /// Every case, in a fixed order.
-pub fn cases<T: Scalar>() -> [Case; 21]
+pub fn cases<T: Scalar>() -> [Case; 22]
 where
     Params: ParamCount<T, 1> + ParamCount<T, 3>,
 {
@@ -937,6 +972,10 @@ where
         Case {
             name: "golden 3D forward: tips and cable lengths",
             run: golden_forward::<T>,
+        },
+        Case {
+            name: "force as state = dead-load path (golden rows)",
+            run: force_state_matches_dead_load::<T>,
         },
         Case {
             name: "golden 3D inverse from cable lengths",
