@@ -9,7 +9,7 @@
 use heapless::Vec;
 use nalgebra::{Matrix3, SVector, Vector3};
 
-use crate::error::{ModelError, finite_vec, positive};
+use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::ShapeLoad;
 pub use crate::loads::TipLoad;
@@ -20,6 +20,7 @@ use crate::ode::force_state::ForceStateRod;
 use crate::report::{SolveReport, Termination};
 use crate::shape::{ShapePoint, ShapeSink, check_queries};
 pub use crate::solve::stopping::default_tolerance;
+pub use crate::solve::ShootingSettings;
 use crate::solve::{Failed, Solved};
 use crate::stability::Stability;
 use crate::sweep::{TangentSet, sweep};
@@ -32,44 +33,6 @@ pub enum Start<T> {
     Cold,
     /// From a previous base strain, 1/m (the cheap path when loads change a little).
     Warm(Vector3<T>),
-}
-
-/// Settings of the shooting solve.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShootingSettings<T> {
-    /// Newton iterations per solve (per load step during continuation).
-    pub max_iterations: u16,
-    /// Tolerance on the dimensionless residual `|tip moment error| L / (E I)`, relative to the base
-    /// rotation `|u0| L` when that exceeds one radian.
-    pub tolerance: T,
-    /// Trust region: largest change of base strain per iteration, as an angle `|du0| L`, rad.
-    pub max_rotation_step_rad: T,
-    /// Most load steps during continuation.
-    pub max_load_steps: u16,
-    /// Run the Jacobi-field stability test on the answer (one extra sweep with six tangents).
-    pub check_stability: bool,
-    /// When a warm start fails, start again cold.
-    pub cold_fallback: bool,
-}
-
-impl<T: Scalar> Default for ShootingSettings<T> {
-    fn default() -> Self {
-        Self {
-            max_iterations: 40,
-            tolerance: default_tolerance(),
-            max_rotation_step_rad: T::lit(1.0),
-            max_load_steps: 64,
-            check_stability: true,
-            cold_fallback: true,
-        }
-    }
-}
-
-impl<T: Scalar> ShootingSettings<T> {
-    fn validate(&self) -> Result<(), ModelError> {
-        positive(self.tolerance, "solver tolerance")?;
-        positive(self.max_rotation_step_rad, "trust region").map(|_| ())
-    }
 }
 
 /// A solved equilibrium.

@@ -9,7 +9,7 @@ use super::newton::{Newton, NewtonOptions, Work, newton};
 use super::verdict;
 use crate::Scalar;
 use crate::ode::RodOde;
-use crate::shooting::ShootingSettings;
+use super::ShootingSettings;
 use crate::sweep::TangentSet;
 
 /// During continuation a corrected solution may differ from its prediction by at most this base

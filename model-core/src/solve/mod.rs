@@ -16,10 +16,49 @@ use crate::Scalar;
 use crate::ode::{Family, RodOde};
 use crate::report::{MAX_FRAME_DRIFT, Termination};
 use crate::scalar::from_columns;
-use crate::shooting::ShootingSettings;
+use crate::error::{ModelError, positive};
+use crate::solve::stopping::default_tolerance;
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet};
 use newton::{Newton, NewtonOptions, Work, newton};
+
+/// Settings of the shooting solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShootingSettings<T> {
+    /// Newton iterations per solve (per load step during continuation).
+    pub max_iterations: u16,
+    /// Tolerance on the dimensionless residual `|tip moment error| L / (E I)`, relative to the base
+    /// rotation `|u0| L` when that exceeds one radian.
+    pub tolerance: T,
+    /// Trust region: largest change of base strain per iteration, as an angle `|du0| L`, rad.
+    pub max_rotation_step_rad: T,
+    /// Most load steps during continuation.
+    pub max_load_steps: u16,
+    /// Run the Jacobi-field stability test on the answer (one extra sweep with six tangents).
+    pub check_stability: bool,
+    /// When a warm start fails, start again cold.
+    pub cold_fallback: bool,
+}
+
+impl<T: Scalar> Default for ShootingSettings<T> {
+    fn default() -> Self {
+        Self {
+            max_iterations: 40,
+            tolerance: default_tolerance(),
+            max_rotation_step_rad: T::lit(1.0),
+            max_load_steps: 64,
+            check_stability: true,
+            cold_fallback: true,
+        }
+    }
+}
+
+impl<T: Scalar> ShootingSettings<T> {
+    pub(crate) fn validate(&self) -> Result<(), ModelError> {
+        positive(self.tolerance, "solver tolerance")?;
+        positive(self.max_rotation_step_rad, "trust region").map(|_| ())
+    }
+}
 
 /// A cold start's first guess is the small-deflection one with its base rotation `|x| L` capped at
 /// this angle, rad (the true rotation grows more slowly than the linear estimate).
