@@ -168,10 +168,10 @@ impl ReadingValidator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use model_checks::reference::golden_bench;
+    use crate::config::rod;
 
     fn validator() -> Result<ReadingValidator, ModelError> {
-        let model = BenchModel::new(golden_bench(10)?)?;
+        let model = BenchModel::new(rod(10)?)?;
         ReadingValidator::new(&model, 5e-4, 1e-5)
     }
 
@@ -252,7 +252,7 @@ mod tests {
 
     #[test]
     fn bad_settings_and_models_are_refused() -> Result<(), ModelError> {
-        let model = BenchModel::new(golden_bench(10)?)?;
+        let model = BenchModel::new(rod(10)?)?;
         assert_eq!(
             ReadingValidator::new(&model, 0.0, 1e-5),
             Err(ModelError::NotPositive("cable step per tick"))
@@ -261,11 +261,10 @@ mod tests {
             ReadingValidator::new(&model, 1e-3, f32::NAN),
             Err(ModelError::NonFinite("cable step margin"))
         );
-        let two_cables = BenchModel::new(model_checks::reference::exp2_bench(
-            model_checks::reference::Exp2Mass::Average,
-            10,
-            2,
-        )?)?;
+        let mut two = rod(10)?;
+        two.cables.pop();
+        let two_cables = BenchModel::new(two)?;
+        assert_eq!(two_cables.rod().cables.len(), 2);
         assert_eq!(
             ReadingValidator::new(&two_cables, 1e-3, 1e-5),
             Err(ModelError::Mismatch("length sources and model cables"))
