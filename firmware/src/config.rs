@@ -1,6 +1,7 @@
 //! What the firmware runs, and the one place that says so (the composition root): the three-cable
 //! bench (a 39 cm Nitinol rod, five guides, cables at 0/120/240 degrees) built here from its
 //! constants in SI units at [`STEPS_PER_SECTION`], three AS5047P spools, a 100 Hz loop.
+//! The library's other modules take the model and settings they are given.
 //!
 //! The robot is the golden reference's bench (thesis experiment 2, average-mass model); a host test
 //! in [`crate::checks`] holds [`rod`] equal, field by field and bit for bit, to
