@@ -2,7 +2,8 @@
 //! measures with SysTick under QEMU's `-icount` (deterministic), the host test checks the cases run
 //! and converge.
 //!
-//! Cases, each at several step counts:
+//! Cases, each at several step counts, under the tip force [`LOAD_FORCE_N`] (the `bench` image
+//! prints it after them, in nanonewtons: [`LOAD_FORCE_NANONEWTON`]):
 //! * `sweep`: one plain forward sweep (`Model::evaluate`),
 //! * `forward_cold`: a cold forward solve (`Model::solve`, `Start::Cold`),
 //! * `inverse_cold`: a cold inverse estimate (`Estimator::new`: a cold forward solve, then
@@ -44,6 +45,31 @@ pub struct BenchLine {
     pub converged: bool,
     /// Tip error against a forward solve of the same model, m (0 where not applicable).
     pub tip_error_m: f32,
+}
+
+/// The tip force of the `sweep`, `forward_cold` and `inverse_cold` cases, where the warm updates
+/// start: the recorded trajectory's first tick, N, global frame, in f64 as recorded (the cases
+/// apply it rounded to f32).
+pub const LOAD_FORCE_N: [f64; 3] = REFERENCE[0].force_n;
+
+/// [`LOAD_FORCE_N`] in whole nanonewtons, rounded to nearest at compile time: what the `bench` image
+/// prints (`bench load force_nanonewton=<x>,<y>,<z>`), as integers so that it links no float
+/// formatting (22 KB, and the counts moved). Exact for the recording's first force: a host test
+/// holds each value divided by 1e9 in f64 equal to the recorded one.
+pub const LOAD_FORCE_NANONEWTON: [i64; 3] = {
+    let [x, y, z] = LOAD_FORCE_N;
+    [nanonewton(x), nanonewton(y), nanonewton(z)]
+};
+
+/// A force in N as whole nanonewtons, rounded half away from zero (`as` saturates: far beyond any
+/// tip force).
+const fn nanonewton(force_n: f64) -> i64 {
+    let scaled = force_n * 1e9;
+    (if scaled < 0.0 {
+        scaled - 0.5
+    } else {
+        scaled + 0.5
+    }) as i64
 }
 
 fn force(tick: usize) -> Vector3<f32> {
@@ -202,6 +228,17 @@ impl Worst {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_printed_load_is_the_cases_force_exactly() {
+        for (nanonewton, f) in LOAD_FORCE_NANONEWTON.iter().zip(LOAD_FORCE_N) {
+            // What the host's study reads back from `expected/bench.run`.
+            let parsed = *nanonewton as f64 / 1e9;
+            assert_eq!(parsed.to_bits(), f.to_bits(), "{nanonewton} nN vs {f} N");
+        }
+        let [x, y, z] = LOAD_FORCE_N;
+        assert_eq!(force(0), Vector3::new(x as f32, y as f32, z as f32));
+    }
 
     #[test]
     fn every_case_runs_and_converges() -> Result<(), ModelError> {

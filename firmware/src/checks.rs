@@ -4,6 +4,9 @@
 //!   encoders and the estimator loop, each tick against the f64 reference, with a sensor fault and a
 //!   jump injected on the way (both must be refused and the last estimate kept).
 //! * [`run_golden`]: the golden 3D rows, from their cable lengths alone.
+//!
+//! Its host tests also hold the composition root's robot ([`crate::config::rod`]) equal to the
+//! golden reference's bench (`model_checks::reference::golden_bench`).
 
 use model_checks::reference::golden_rows;
 use model_core::{ModelError, Termination};
@@ -275,6 +278,26 @@ pub fn run_golden(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::{STEPS_PER_SECTION, rod};
+    use model_checks::reference::golden_bench;
+
+    #[test]
+    fn the_robot_is_the_golden_reference_bench_bit_for_bit() -> Result<(), ModelError> {
+        // The production robot, every field (`PartialEq`: equal floats, none of them NaN), and bit
+        // for bit (`Debug` prints each float's shortest round trip, the sign of a zero included).
+        let (robot, reference) = (
+            rod::<f32>(STEPS_PER_SECTION)?,
+            golden_bench::<f32>(STEPS_PER_SECTION)?,
+        );
+        assert_eq!(robot, reference);
+        assert_eq!(format!("{robot:?}"), format!("{reference:?}"));
+        // The same constants at the step counts the bench image measures, and in f64.
+        for steps in crate::bench::STEP_COUNTS {
+            assert_eq!(rod::<f32>(steps)?, golden_bench::<f32>(steps)?, "{steps}");
+            assert_eq!(rod::<f64>(steps)?, golden_bench::<f64>(steps)?, "{steps}");
+        }
+        Ok(())
+    }
 
     #[test]
     fn the_trajectory_passes_on_the_host_in_f32() -> Result<(), SetupError> {

@@ -1,13 +1,65 @@
-//! What the firmware runs: the golden three-cable bench (39 cm Nitinol rod, five guides, cables at
-//! 0/120/240 degrees) at [`STEPS_PER_SECTION`], three AS5047P spools, a 100 Hz loop.
+//! What the firmware runs, and the one place that says so (the composition root): the three-cable
+//! bench (a 39 cm Nitinol rod, five guides, cables at 0/120/240 degrees) built here from its
+//! constants in SI units at [`STEPS_PER_SECTION`], three AS5047P spools, a 100 Hz loop.
+//! The library's other modules take the model and settings they are given.
+//!
+//! The robot is the golden reference's bench (thesis experiment 2, average-mass model); a host test
+//! in [`crate::checks`] holds [`rod`] equal, field by field and bit for bit, to
+//! `model_checks::reference::golden_bench`, so the two cannot drift apart silently.
 
-use model_checks::reference::{FREE_LENGTH_M, golden_bench};
 use model_core::inverse::{EstimatorSettings, InverseSettings};
-use model_core::{Model, ModelError, Quaternion, Scalar};
+use model_core::{
+    Cable, CrossSection, Guide, GuideMass, Material, Model, ModelError, Quaternion, Rod, Scalar,
+    Section, Stiffness,
+};
+use nalgebra::{Vector2, Vector3};
 
 use crate::control::{LoopConfig, SHAPE_POINTS};
 use crate::encoder::as5047p::COUNTS_PER_TURN;
 use crate::spool::{Direction, SpoolCalibration};
+
+/// Free length of the rod (one section): 40 cm of Nitinol, 1 cm of it in the base clamp, m.
+pub const ROD_LENGTH_M: f64 = 0.39;
+
+/// Rod diameter (solid circle), m.
+pub const ROD_DIAMETER_M: f64 = 1.56e-3;
+
+/// Young's modulus of the Nitinol, Pa (fitted; measured 61.6-62.7 GPa).
+pub const YOUNGS_MODULUS_PA: f64 = 62.7e9;
+
+/// Poisson's ratio of the Nitinol.
+pub const POISSON_RATIO: f64 = 0.3;
+
+/// Line density of rod and guides weighed together (14.9 g over the 40 cm rod) and spread evenly
+/// (the average-mass model: the guides themselves are weightless, [`GuideMass::Ignore`]), kg/m.
+pub const LINE_DENSITY_KG_PER_M: f64 = 0.0149 / 0.40;
+
+/// Cable guides on the rod.
+pub const GUIDE_COUNT: usize = 5;
+
+/// Guide thickness along the rod, m.
+pub const GUIDE_THICKNESS_M: f64 = 3.01e-3;
+
+/// Arc length of the first guide's centre, m: it starts 3.9 mm from the clamp.
+pub const GUIDE_FIRST_CENTRE_M: f64 = 0.0039 + GUIDE_THICKNESS_M / 2.0;
+
+/// Distance between guide centres, m.
+pub const GUIDE_PITCH_M: f64 = 0.095;
+
+/// Distance of the cable holes from the backbone, m.
+pub const CABLE_RADIUS_M: f64 = 0.01;
+
+/// The three cable holes' directions `(cos a, sin a)` in the guide's frame, at a = 0, 120 and 240
+/// degrees, as literals: building the bench takes no trigonometry (the firmware links no sine).
+/// Cable 0 is on the upper side (+y at the base).
+pub const CABLE_DIRECTIONS: [(f64, f64); 3] = [
+    (1.0, 0.0),
+    (-0.5, 0.866_025_403_784_438_6),
+    (-0.5, -0.866_025_403_784_438_6),
+];
+
+/// Standard gravity, m/s^2, along global -y.
+pub const GRAVITY_M_S2: f64 = 9.81;
 
 /// RK4 steps over the rod (one section; the plan adds one per guide interval: 22 in all). At 20 the
 /// f32 inverse reproduces the golden tips within 0.02 mm; the cost of a sweep is linear in it.
@@ -66,14 +118,50 @@ pub const MODEL_NODES: usize = 20;
 /// The estimator's model: f32, quaternion attitude, [`MODEL_NODES`] nodes.
 pub type BenchModel = Model<f32, Quaternion<f32>, MODEL_NODES>;
 
-/// The estimator's model of the bench, in f32.
+/// The bench as a rod in `T`, with `steps_per_section` RK4 steps over its one section (the
+/// estimator uses [`STEPS_PER_SECTION`]): the constants above, each terminated cable running from
+/// the first guide to the tip, the rod's default base (clamped at the origin, tangent along +x).
+/// Every length is converted from its f64 constant once, as computed in f64.
+///
+/// # Errors
+/// Never for these constants with `steps_per_section > 0`; [`ModelError`] if a value were invalid
+/// (as zero steps is, when the model is built) or the rod's capacities too small.
+pub fn rod<T: Scalar>(steps_per_section: u16) -> Result<Rod<T>, ModelError> {
+    let mut rod = Rod::new();
+    rod.gravity_m_s2 = Vector3::new(T::zero(), T::lit(-GRAVITY_M_S2), T::zero());
+    rod.guide_mass = GuideMass::Ignore;
+    let material = Material::isotropic(T::lit(YOUNGS_MODULUS_PA), T::lit(POISSON_RATIO))?;
+    let cross_section = CrossSection::solid_circle(T::lit(ROD_DIAMETER_M))?;
+    rod.push_section(Section {
+        length_m: T::lit(ROD_LENGTH_M),
+        stiffness: Stiffness::from_material(&material, &cross_section)?,
+        line_density_kg_per_m: T::lit(LINE_DENSITY_KG_PER_M),
+        steps: steps_per_section,
+    })?;
+    for k in 0..GUIDE_COUNT {
+        rod.push_guide(Guide {
+            s_m: T::lit(GUIDE_FIRST_CENTRE_M + k as f64 * GUIDE_PITCH_M),
+            thickness_m: T::lit(GUIDE_THICKNESS_M),
+            mass_kg: T::zero(),
+        })?;
+    }
+    for (x, y) in CABLE_DIRECTIONS {
+        rod.push_cable(Cable {
+            hole_m: Vector2::new(T::lit(x * CABLE_RADIUS_M), T::lit(y * CABLE_RADIUS_M)),
+            end_m: T::lit(ROD_LENGTH_M),
+        })?;
+    }
+    Ok(rod)
+}
+
+/// The estimator's model of the bench, in f32 at [`STEPS_PER_SECTION`].
 ///
 /// # Errors
 /// Never for these constants; [`ModelError`] if the bench were invalid.
 // Out of line: building the plan takes temporaries that need not stay on the caller's stack.
 #[inline(never)]
 pub fn model() -> Result<BenchModel, ModelError> {
-    Model::new(golden_bench(STEPS_PER_SECTION)?)
+    Model::new(rod(STEPS_PER_SECTION)?)
 }
 
 /// Cable length per encoder count, m.
@@ -84,7 +172,7 @@ pub fn metres_per_count() -> f32 {
 /// The loop's settings: measurement noise from the encoder resolution, three sweeps per tick,
 /// backbone points at the quarters of the rod.
 pub fn loop_config() -> LoopConfig {
-    let quarter = FREE_LENGTH_M as f32 / SHAPE_POINTS as f32;
+    let quarter = ROD_LENGTH_M as f32 / SHAPE_POINTS as f32;
     LoopConfig {
         tick_period_s: TICK_PERIOD_S,
         max_cable_speed_m_per_s: MAX_CABLE_SPEED_M_PER_S,

@@ -7,10 +7,9 @@
 //! start that lost the answer does not find it by itself). Nothing here panics.
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
-use model_core::{ModelError, Quaternion, ShapePoint, Termination};
+use model_core::{Attitude, Model, ModelError, ShapePoint, Termination};
 use nalgebra::Vector3;
 
-use crate::config::{BenchModel, MODEL_NODES};
 use crate::encoder::CableLengthSource;
 use crate::validate::{CABLES, ReadingValidator, Rejection};
 
@@ -108,24 +107,25 @@ pub fn read_all<S: CableLengthSource>(
     ]
 }
 
-/// The estimator loop over a model of the three-cable rod.
+/// The estimator loop over an f32 model of the three-cable rod, with attitude `A` and room for
+/// `NODES` plan nodes (the firmware's is `config::BenchModel`, built by [`crate::config::model`]).
 #[derive(Debug)]
-pub struct EstimatorLoop<'m> {
-    model: &'m BenchModel,
+pub struct EstimatorLoop<'m, A: Attitude<f32>, const NODES: usize> {
+    model: &'m Model<f32, A, NODES>,
     config: LoopConfig,
     validator: ReadingValidator,
-    estimator: Option<WarmEstimator<'m>>,
+    estimator: Option<WarmEstimator<'m, A, NODES>>,
     last: Option<TickRecord>,
     next_tick: u32,
     failures_in_row: u8,
 }
 
-impl<'m> EstimatorLoop<'m> {
+impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
     /// A loop over `model` (three cables).
     ///
     /// # Errors
     /// [`ModelError`] for a model without three cables or a non-positive period, speed or margin.
-    pub fn new(model: &'m BenchModel, config: LoopConfig) -> Result<Self, ModelError> {
+    pub fn new(model: &'m Model<f32, A, NODES>, config: LoopConfig) -> Result<Self, ModelError> {
         if !(config.tick_period_s.is_finite() && config.tick_period_s > 0.0) {
             return Err(ModelError::NotPositive("tick period"));
         }
@@ -253,17 +253,17 @@ impl<'m> EstimatorLoop<'m> {
     }
 }
 
-/// The warm-started estimator the loop keeps.
-type WarmEstimator<'m> = Estimator<'m, f32, Quaternion<f32>, 3, MODEL_NODES>;
+/// The warm-started estimator the loop keeps (three tip-force parameters).
+type WarmEstimator<'m, A, const NODES: usize> = Estimator<'m, f32, A, 3, NODES>;
 
 /// The first estimate: a cold inverse solve. Kept out of line so that its frame (a cold forward
 /// solve with load continuation) is not added to the warm path's on the stack.
 #[inline(never)]
-fn cold<'m>(
-    model: &'m BenchModel,
+fn cold<'m, A: Attitude<f32>, const NODES: usize>(
+    model: &'m Model<f32, A, NODES>,
     lengths_m: &[f32; CABLES],
     settings: EstimatorSettings<f32>,
-) -> Result<(WarmEstimator<'m>, Estimate<f32, 3>), ModelError> {
+) -> Result<(WarmEstimator<'m, A, NODES>, Estimate<f32, 3>), ModelError> {
     Estimator::new(
         model,
         LoadBasis::tip_force(),
@@ -275,8 +275,8 @@ fn cold<'m>(
 
 /// A warm update, out of line for the same reason as [`cold`].
 #[inline(never)]
-fn warm(
-    estimator: &mut WarmEstimator<'_>,
+fn warm<A: Attitude<f32>, const NODES: usize>(
+    estimator: &mut WarmEstimator<'_, A, NODES>,
     lengths_m: &[f32; CABLES],
 ) -> Result<Estimate<f32, 3>, ModelError> {
     estimator.update(lengths_m)

@@ -9,7 +9,7 @@
 //! | spool calibration (counts <-> metres) | [`spool`] |
 //! | reading validation (typed rejections) | [`validate`] |
 //! | the estimator loop and its output records | [`control`] |
-//! | the bench: model, spools, loop settings | [`config`] |
+//! | the composition root: the robot (rod, model), spools, loop settings | [`config`] |
 //! | the recorded trajectory and its f64 reference | [`fixture`] |
 //! | end-to-end and golden checks run by the images | [`checks`] |
 //! | instruction-count benchmarks | [`bench`] |

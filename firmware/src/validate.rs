@@ -5,10 +5,8 @@
 //! last accepted reading than the cable can travel in that time (a physical speed limit times the
 //! elapsed ticks, plus a margin for quantisation).
 
-use model_core::ModelError;
 use model_core::inverse::cable_length_bound_m;
-
-use crate::config::BenchModel;
+use model_core::{Attitude, Model, ModelError};
 
 /// Cables on the bench, one per length source.
 pub const CABLES: usize = 3;
@@ -62,14 +60,15 @@ struct Accepted {
 }
 
 impl ReadingValidator {
-    /// A validator for `model`'s three cables, allowing each cable to move `max_step_per_tick_m` per
-    /// tick plus `margin_m` (quantisation, noise).
+    /// A validator for the three cables of `model` (any f32 model: attitude `A`, `NODES` plan nodes),
+    /// allowing each cable to move `max_step_per_tick_m` per tick plus `margin_m` (quantisation,
+    /// noise), both in m.
     ///
     /// # Errors
     /// [`ModelError::Mismatch`] when the model does not have three cables;
     /// [`ModelError::NotPositive`] or [`ModelError::NonFinite`] for a bad step or margin.
-    pub fn new(
-        model: &BenchModel,
+    pub fn new<A: Attitude<f32>, const NODES: usize>(
+        model: &Model<f32, A, NODES>,
         max_step_per_tick_m: f32,
         margin_m: f32,
     ) -> Result<Self, ModelError> {
@@ -168,10 +167,10 @@ impl ReadingValidator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use model_checks::reference::golden_bench;
+    use crate::config::{BenchModel, rod};
 
     fn validator() -> Result<ReadingValidator, ModelError> {
-        let model = BenchModel::new(golden_bench(10)?)?;
+        let model = BenchModel::new(rod(10)?)?;
         ReadingValidator::new(&model, 5e-4, 1e-5)
     }
 
@@ -251,8 +250,16 @@ mod tests {
     }
 
     #[test]
+    fn any_f32_model_of_the_rod_gives_the_same_validator() -> Result<(), ModelError> {
+        // model-core's default model type (72 nodes) next to the bench's (20).
+        let other = Model::<f32>::new(rod(10)?)?;
+        assert_eq!(ReadingValidator::new(&other, 5e-4, 1e-5)?, validator()?);
+        Ok(())
+    }
+
+    #[test]
     fn bad_settings_and_models_are_refused() -> Result<(), ModelError> {
-        let model = BenchModel::new(golden_bench(10)?)?;
+        let model = BenchModel::new(rod(10)?)?;
         assert_eq!(
             ReadingValidator::new(&model, 0.0, 1e-5),
             Err(ModelError::NotPositive("cable step per tick"))
@@ -261,11 +268,10 @@ mod tests {
             ReadingValidator::new(&model, 1e-3, f32::NAN),
             Err(ModelError::NonFinite("cable step margin"))
         );
-        let two_cables = BenchModel::new(model_checks::reference::exp2_bench(
-            model_checks::reference::Exp2Mass::Average,
-            10,
-            2,
-        )?)?;
+        let mut two = rod(10)?;
+        two.cables.pop();
+        let two_cables = BenchModel::new(two)?;
+        assert_eq!(two_cables.rod().cables.len(), 2);
         assert_eq!(
             ReadingValidator::new(&two_cables, 1e-3, 1e-5),
             Err(ModelError::Mismatch("length sources and model cables"))
