@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every test of the project, with the set-up a fresh machine needs (idempotent, quick when present):
-# the thumbv7em target, Debian's qemu-system-arm for the emulated MCU, and a TrueType font for plots.
+# the thumbv7em target, Debian's qemu-system-arm for the emulated MCU, a TrueType font for plots, and
+# numpy and scipy for the independent generator of the golden reference.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -20,9 +21,20 @@ apt_install() {
     fi
 }
 
+python_packages() {
+    # pip only when numpy or scipy is missing; the versions the generator was checked with.
+    python3 -c 'import numpy, scipy' 2>/dev/null && return 0
+    local pip=(python3 -m pip install --quiet --disable-pip-version-check -r tests/golden/requirements.txt)
+    "${pip[@]}" || "${pip[@]}" --break-system-packages
+}
+
 echo "== set-up"
 rustup target add thumbv7em-none-eabihf
 apt_install qemu-system-arm binutils fonts-dejavu-core
+python_packages
+
+echo "== the golden 3D reference, re-derived by its independent generator (Python, scipy)"
+python3 tests/golden/bench_3d_cables.py --check
 
 echo "== host tests (model-core in f64 and f32, host-sim, cross-crate)"
 cargo test --workspace

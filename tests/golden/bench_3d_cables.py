@@ -2,7 +2,7 @@
 """Independent reference for tests/data/golden/bench_3d_cables.csv (Python + numpy + scipy only).
 
 Cosserat rod (shearable, extensible), thesis exp-2 bench with the average-mass model, written from
-/work/shared/MODEL.md ("Statics of one section", "Cable lengths") and not from the Rust sources:
+the model's equations (MODEL.md at the repository's root) and not from the Rust sources:
 
     r' = R v,  R' = R hat(u),  v = D^-1 R^T n + e3,  u' = -C^-1 (u x C u + v x R^T n),
     n(s) = F_tip + g e_g lambda (L - s)   (internal force in closed form, gravity along -y).
@@ -28,7 +28,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
-# Bench parameters (MODEL.md, "Bench parameters").
+# Bench parameters (thesis ch. 4 as corrected in MODEL.md).
 D_ROD, E, NU, L = 1.56e-3, 62.7e9, 0.3, 0.39
 LAM, G_ACC = 0.0149 / 0.40, 9.81
 G_VEC = np.array([0.0, -G_ACC, 0.0])
