@@ -1,12 +1,14 @@
 //! The estimator loop: one [`EstimatorLoop::tick`] per control period.
 //!
 //! Readings -> validation -> warm-started f32 [`Estimator::update`] (a cold estimate on the first
-//! good tick) -> tip force, tip pose and a few backbone points. A refused reading, an input error or
-//! a solve that did not converge leaves the last good estimate in place and says why; after
-//! [`LoopConfig::restart_after`] failed solves in a row the next tick starts cold again (a warm
-//! start that lost the answer does not find it by itself). Nothing here panics.
+//! good tick) -> tip force, tip pose and a few backbone points (from the solve's own sweeps). A
+//! refused reading, an input error or a solve that did not converge leaves the last good estimate in
+//! place and says why; after [`LoopConfig::restart_after`] failed solves in a row the next tick
+//! starts cold again (a warm start that lost the answer does not find it by itself). Nothing here
+//! panics.
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
+use model_core::shape::check_queries;
 use model_core::{Attitude, Model, ModelError, ShapePoint, Termination};
 use nalgebra::Vector3;
 
@@ -15,6 +17,9 @@ use crate::validate::{CABLES, ReadingValidator, Rejection};
 
 /// Backbone points reported each tick.
 pub const SHAPE_POINTS: usize = 4;
+
+// The estimator hands out at most this many points from its own sweeps.
+const _: () = assert!(SHAPE_POINTS <= model_core::shape::MAX_SHAPE_POINTS);
 
 /// How the loop runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -134,6 +139,8 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
             config.max_cable_speed_m_per_s * config.tick_period_s,
             config.step_margin_m,
         )?;
+        // The backbone's arc lengths, checked once here (the solves write the points each tick).
+        check_queries(&config.shape_s_m, SHAPE_POINTS, model.length_m())?;
         Ok(Self {
             model,
             config,
@@ -184,9 +191,19 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
 
     fn solve<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> Status<E> {
         let is_cold = self.estimator.is_none();
+        // The backbone comes from the solve's own sweeps (no sweep more).
+        let mut points = [ShapePoint::default(); SHAPE_POINTS];
+        let shape_s_m = &self.config.shape_s_m;
         let result = match &mut self.estimator {
-            Some(estimator) => warm(estimator, lengths_m),
-            None => cold(self.model, lengths_m, self.config.estimator).map(|(estimator, first)| {
+            Some(estimator) => warm(estimator, lengths_m, shape_s_m, &mut points),
+            None => cold(
+                self.model,
+                lengths_m,
+                self.config.estimator,
+                shape_s_m,
+                &mut points,
+            )
+            .map(|(estimator, first)| {
                 self.estimator = Some(estimator);
                 first
             }),
@@ -203,57 +220,44 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
         if !(converged || one_step) {
             return Status::NotConverged(estimate.report.termination);
         }
-        match self.record(tick, lengths_m, &estimate, is_cold, converged) {
-            Ok(record) => {
-                self.last = Some(record);
-                Status::Fresh
-            }
-            Err(error) => Status::Refused(error),
-        }
-    }
-
-    // Not inlined: its shape buffer and sweep need not share a frame with the solves'.
-    #[inline(never)]
-    fn record(
-        &self,
-        tick: u32,
-        lengths_m: &[f32; CABLES],
-        estimate: &Estimate<f32, 3>,
-        cold: bool,
-        converged: bool,
-    ) -> Result<TickRecord, ModelError> {
-        let blank = ShapePoint::default();
-        let mut points = [blank; SHAPE_POINTS];
-        self.model.shape_at(
-            &estimate.base_strain_per_m,
-            &estimate.load,
-            &self.config.shape_s_m,
-            &mut points,
-        )?;
-        let array = |v: &Vector3<f32>| [v.x, v.y, v.z];
-        let mut residual = [0.0f32; CABLES];
-        for (slot, value) in residual.iter_mut().zip(estimate.cable_residual_m.iter()) {
-            *slot = *value;
-        }
-        Ok(TickRecord {
-            tick,
-            tip_force_n: array(&estimate.params),
-            force_std_n: array(&estimate.quality.force_std_n),
-            tip_position_m: array(&estimate.tip_position_m),
-            tip_std_m: array(&estimate.quality.tip_std_m),
-            tip_tangent: array(&estimate.tip_rotation.column(2).into_owned()),
-            backbone_m: points.map(|p| array(&p.position_m)),
-            cable_length_m: *lengths_m,
-            cable_residual_m: residual,
-            sweeps: estimate.report.sweeps,
-            cold,
-            converged,
-            determination: estimate.quality.determination,
-        })
+        self.last = Some(record(
+            tick, lengths_m, &estimate, &points, is_cold, converged,
+        ));
+        Status::Fresh
     }
 }
 
-/// The warm-started estimator the loop keeps (three tip-force parameters).
+/// The tick's output record of a converged estimate and its backbone points.
+fn record(
+    tick: u32,
+    lengths_m: &[f32; CABLES],
+    estimate: &Estimate<f32, 3>,
+    points: &[ShapePoint<f32>; SHAPE_POINTS],
+    cold: bool,
+    converged: bool,
+) -> TickRecord {
+    let array = |v: &Vector3<f32>| [v.x, v.y, v.z];
+    let mut residual = [0.0f32; CABLES];
+    for (slot, value) in residual.iter_mut().zip(estimate.cable_residual_m.iter()) {
+        *slot = *value;
+    }
+    TickRecord {
+        tick,
+        tip_force_n: array(&estimate.params),
+        force_std_n: array(&estimate.quality.force_std_n),
+        tip_position_m: array(&estimate.tip_position_m),
+        tip_std_m: array(&estimate.quality.tip_std_m),
+        tip_tangent: array(&estimate.tip_rotation.column(2).into_owned()),
+        backbone_m: points.map(|p| array(&p.position_m)),
+        cable_length_m: *lengths_m,
+        cable_residual_m: residual,
+        sweeps: estimate.report.sweeps,
+        cold,
+        converged,
+        determination: estimate.quality.determination,
+    }
+}
+
 type WarmEstimator<'m, A, const NODES: usize> = Estimator<'m, f32, A, 3, NODES>;
 
 /// The first estimate: a cold inverse solve. Kept out of line so that its frame (a cold forward
@@ -263,13 +267,17 @@ fn cold<'m, A: Attitude<f32>, const NODES: usize>(
     model: &'m Model<f32, A, NODES>,
     lengths_m: &[f32; CABLES],
     settings: EstimatorSettings<f32>,
+    shape_s_m: &[f32; SHAPE_POINTS],
+    points: &mut [ShapePoint<f32>; SHAPE_POINTS],
 ) -> Result<(WarmEstimator<'m, A, NODES>, Estimate<f32, 3>), ModelError> {
-    Estimator::new(
+    Estimator::new_with_shape(
         model,
         LoadBasis::tip_force(),
         lengths_m,
         Vector3::zeros(),
         settings,
+        shape_s_m,
+        points,
     )
 }
 
@@ -278,8 +286,10 @@ fn cold<'m, A: Attitude<f32>, const NODES: usize>(
 fn warm<A: Attitude<f32>, const NODES: usize>(
     estimator: &mut WarmEstimator<'_, A, NODES>,
     lengths_m: &[f32; CABLES],
+    shape_s_m: &[f32; SHAPE_POINTS],
+    points: &mut [ShapePoint<f32>; SHAPE_POINTS],
 ) -> Result<Estimate<f32, 3>, ModelError> {
-    estimator.update(lengths_m)
+    estimator.update_with_shape(lengths_m, shape_s_m, points)
 }
 
 #[cfg(test)]

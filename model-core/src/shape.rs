@@ -38,6 +38,49 @@ impl<T: nalgebra::RealField + Copy> ShapePoint<T> {
     }
 }
 
+/// Most shape points a warm estimator hands out per update (its scratch buffer's size: a control
+/// loop reports a few backbone points per tick; [`crate::Model::shape_at`] gives any number).
+pub const MAX_SHAPE_POINTS: usize = 4;
+
+/// Checked shape queries and the caller's output buffer.
+#[derive(Debug)]
+pub(crate) struct Shape<'a, T> {
+    pub s_m: &'a [T],
+    pub out: &'a mut [ShapePoint<T>],
+}
+
+impl<'a, T: Scalar> Shape<'a, T> {
+    /// Checks the queries (see [`check_queries`]) and that at most [`MAX_SHAPE_POINTS`] are asked.
+    pub(crate) fn new(
+        length_m: T,
+        s_m: &'a [T],
+        out: &'a mut [ShapePoint<T>],
+    ) -> Result<Self, ModelError> {
+        check_queries(s_m, out.len(), length_m)?;
+        if s_m.len() > MAX_SHAPE_POINTS {
+            return Err(ModelError::Capacity("shape points"));
+        }
+        Ok(Self { s_m, out })
+    }
+
+    /// A sink writing into the buffer from its start.
+    pub(crate) fn sink(&mut self) -> ShapeSink<'_, T> {
+        ShapeSink {
+            s_m: self.s_m,
+            out: self.out,
+            written: 0,
+        }
+    }
+
+    /// Takes the points of another buffer for the same queries.
+    pub(crate) fn take(&mut self, other: Shape<'_, T>) {
+        let n = self.out.len().min(other.out.len());
+        if let (Some(to), Some(from)) = (self.out.get_mut(..n), other.out.get(..n)) {
+            to.copy_from_slice(from);
+        }
+    }
+}
+
 /// Where a sweep writes shape points: sorted query arc lengths and an output slice of at least the same length.
 #[derive(Debug)]
 pub(crate) struct ShapeSink<'a, T> {
@@ -62,11 +105,11 @@ impl<T: Copy> ShapeSink<'_, T> {
 
 /// Checks shape queries: finite, increasing, within `[0, length_m]`, and an output buffer of at
 /// least `out_len` points.
-pub(crate) fn check_queries<T: Scalar>(
-    s_m: &[T],
-    out_len: usize,
-    length_m: T,
-) -> Result<(), ModelError> {
+///
+/// # Errors
+/// [`ModelError::Mismatch`] for a short buffer, [`ModelError::NonFinite`],
+/// [`ModelError::Unordered`] or [`ModelError::OutOfRange`] for a bad arc length.
+pub fn check_queries<T: Scalar>(s_m: &[T], out_len: usize, length_m: T) -> Result<(), ModelError> {
     if out_len < s_m.len() {
         return Err(ModelError::Mismatch("shape queries and output buffer"));
     }

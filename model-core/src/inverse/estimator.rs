@@ -13,6 +13,7 @@ use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::plan::MAX_NODES;
 use crate::report::Termination;
+use crate::shape::{MAX_SHAPE_POINTS, Shape, ShapePoint};
 use crate::solve::newton::Work;
 use crate::stability::Stability;
 
@@ -86,6 +87,40 @@ where
         start_params: SVector<T, P>,
         settings: EstimatorSettings<T>,
     ) -> Result<(Self, Estimate<T, P>), ModelError> {
+        Self::start(model, basis, measured_m, start_params, settings, None)
+    }
+
+    /// [`Estimator::new`], and the backbone of the first estimate at the arc lengths `s_m`
+    /// (increasing, within `[0, L]`, at most [`MAX_SHAPE_POINTS`]) written into `out`, from the sweep
+    /// that linearises it: no sweep more.
+    pub fn new_with_shape(
+        model: &'a Model<T, A, NODES>,
+        basis: LoadBasis<T, P>,
+        measured_m: &[T],
+        start_params: SVector<T, P>,
+        settings: EstimatorSettings<T>,
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<(Self, Estimate<T, P>), ModelError> {
+        let shape = Shape::new(model.length_m(), s_m, out)?;
+        Self::start(
+            model,
+            basis,
+            measured_m,
+            start_params,
+            settings,
+            Some(shape),
+        )
+    }
+
+    fn start(
+        model: &'a Model<T, A, NODES>,
+        basis: LoadBasis<T, P>,
+        measured_m: &[T],
+        start_params: SVector<T, P>,
+        settings: EstimatorSettings<T>,
+        mut shape: Option<Shape<'_, T>>,
+    ) -> Result<(Self, Estimate<T, P>), ModelError> {
         if settings.max_sweeps == 0 {
             return Err(ModelError::NotPositive("estimator sweep budget"));
         }
@@ -108,7 +143,7 @@ where
             stability: first.report.stability,
         };
         let problem = estimator.problem(validate_measurements(model, measured_m)?);
-        let sw = problem.full_sweep(&estimator.x);
+        let sw = problem.sweep(&estimator.x, true, shape.as_mut().map(Shape::sink).as_mut());
         if sw.finite {
             estimator.lin = problem.linearize(&sw);
         }
@@ -133,22 +168,52 @@ where
     /// update, and the next update measures it). It reports [`Termination::Converged`] when the
     /// last estimate already met the tolerances, [`Termination::IterationLimit`] when it took a step.
     pub fn update(&mut self, measured_m: &[T]) -> Result<Estimate<T, P>, ModelError> {
+        self.update_inner(measured_m, None)
+    }
+
+    /// [`Estimator::update`], and the backbone of the estimate at the arc lengths `s_m` (increasing,
+    /// within `[0, L]`, at most [`MAX_SHAPE_POINTS`]) written into `out`, from the update's own
+    /// sweeps: no sweep more. (The one-sweep update's estimate is a linear prediction that no sweep
+    /// has seen: it takes one plain sweep more for its shape, and counts it.) The points are valid
+    /// when the estimate is: on a failed update they belong to the last good estimate.
+    pub fn update_with_shape(
+        &mut self,
+        measured_m: &[T],
+        s_m: &[T],
+        out: &mut [ShapePoint<T>],
+    ) -> Result<Estimate<T, P>, ModelError> {
+        let shape = Shape::new(self.model.length_m(), s_m, out)?;
+        self.update_inner(measured_m, Some(shape))
+    }
+
+    fn update_inner(
+        &mut self,
+        measured_m: &[T],
+        mut shape: Option<Shape<'_, T>>,
+    ) -> Result<Estimate<T, P>, ModelError> {
         let problem = self.problem(validate_measurements(self.model, measured_m)?);
         let mut work = Work::default();
         let budget = u16::from(self.settings.max_sweeps);
         if budget == 1 {
-            return Ok(self.one_step(&problem, work));
+            let mut out = self.one_step(&problem, work);
+            if let Some(mut shape) = shape {
+                // The stepped point's shape, from one plain sweep at it.
+                out.report.sweeps = out.report.sweeps.saturating_add(1);
+                problem.sweep(&self.x, false, Some(&mut shape.sink()));
+            }
+            return Ok(out);
         }
 
         // The residual at the last estimate for the new measurements; the Jacobian is the last one.
         work.sweeps += 1;
-        let sw = problem.plain_sweep(&self.x);
+        let sw = problem.sweep(&self.x, false, shape.as_mut().map(Shape::sink).as_mut());
         if !sw.finite {
             return Ok(problem.finish(self.x, &self.lin, Termination::NonFinite, work));
         }
         self.lin.set_residual(&sw, problem.cable_residual(&sw));
         let mut merit = problem.merit(&self.x.p, &self.lin);
         let mut exact = false;
+        let mut scratch = [ShapePoint::default(); MAX_SHAPE_POINTS];
         loop {
             let Some(red) = problem.reduce(&self.lin) else {
                 return Ok(self.finish(&problem, Termination::Singular, work));
@@ -168,13 +233,21 @@ where
                 u0: self.x.u0 + du,
                 p: self.x.p + dp,
             };
-            let sw = problem.full_sweep(&trial);
+            // A trial's shape goes into the scratch buffer, kept only if the trial is.
+            let mut trial_shape = shape.as_ref().map(|s| Shape {
+                s_m: s.s_m,
+                out: scratch.get_mut(..s.s_m.len()).unwrap_or(&mut []),
+            });
+            let sw = problem.sweep(&trial, true, trial_shape.as_mut().map(Shape::sink).as_mut());
             if sw.finite {
                 let lin = problem.linearize(&sw);
                 let trial_merit = problem.merit(&trial.p, &lin);
                 if trial_merit < merit && problem.acceptable(&trial.p, &lin) {
                     (self.x, self.lin, merit, exact) = (trial, lin, trial_merit, true);
                     self.stability = self.verdict(&problem);
+                    if let (Some(shape), Some(trial)) = (shape.as_mut(), trial_shape) {
+                        shape.take(trial);
+                    }
                     continue;
                 }
             }

@@ -64,8 +64,8 @@ pub struct InverseSettings<T> {
     /// Check the stability of the answer (free: uses the tangents already computed).
     pub check_stability: bool,
     /// The solve stops when the next step would move the tip by less than this, m (and the fit by
-    /// less than `step_tolerance_sigma`). Raised to what the scalar type resolves: `4 L` times the
-    /// default shooting tolerance (37 um for f32 on a 39 cm rod).
+    /// less than `step_tolerance_sigma`). Raised to what the scalar type resolves: `L` times the
+    /// default shooting tolerance (9.4 um for f32 on a 39 cm rod).
     pub tip_tolerance_m: T,
     /// A priori standard deviation of each load parameter, in units of the rod's buckling scale
     /// (`E I / L^2` for a force, `E I / L` for a moment); infinity for none. With a prior the answer is

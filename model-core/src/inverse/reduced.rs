@@ -23,6 +23,7 @@ use crate::ode::Family;
 use crate::ode::dead_load::DeadLoadRod;
 use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
 use crate::scalar::from_columns;
+use crate::shape::ShapeSink;
 use crate::solve::newton::{NewtonOptions, Work, newton};
 use crate::solve::stopping;
 use crate::stability::{Stability, classify};
@@ -202,11 +203,22 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
     }
 
     pub(super) fn full_sweep(&self, x: &Point<T, P>) -> Sweep<T, 3> {
-        sweep(&self.ode(&x.p), &x.u0, self.tangents(), None)
+        self.sweep(x, true, None)
     }
 
-    pub(super) fn plain_sweep(&self, x: &Point<T, P>) -> Sweep<T, 3> {
-        sweep(&self.ode(&x.p), &x.u0, TangentSet::NONE, None)
+    /// A sweep at `x`, with every tangent (`linearise`) or none, writing shape points into `shape`.
+    pub(super) fn sweep(
+        &self,
+        x: &Point<T, P>,
+        linearise: bool,
+        shape: Option<&mut ShapeSink<'_, T>>,
+    ) -> Sweep<T, 3> {
+        let which = if linearise {
+            self.tangents()
+        } else {
+            TangentSet::NONE
+        };
+        sweep(&self.ode(&x.p), &x.u0, which, shape)
     }
 
     pub(super) fn cable_residual(&self, sw: &Sweep<T, 3>) -> CableVector<T> {

@@ -5,11 +5,11 @@
 
 use nalgebra::{Const, DimMin, SVector};
 
+use super::ShootingSettings;
 use super::newton::{Newton, NewtonOptions, Work, newton};
 use super::verdict;
 use crate::Scalar;
 use crate::ode::RodOde;
-use super::ShootingSettings;
 use crate::sweep::TangentSet;
 
 /// During continuation a corrected solution may differ from its prediction by at most this base

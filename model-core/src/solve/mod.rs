@@ -13,10 +13,10 @@ pub(crate) mod stopping;
 use nalgebra::{Const, DimMin, SMatrix, SVector};
 
 use crate::Scalar;
+use crate::error::{ModelError, positive};
 use crate::ode::{Family, RodOde};
 use crate::report::{MAX_FRAME_DRIFT, Termination};
 use crate::scalar::from_columns;
-use crate::error::{ModelError, positive};
 use crate::solve::stopping::default_tolerance;
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet};

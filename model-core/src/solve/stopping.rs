@@ -46,7 +46,7 @@ pub(crate) fn tip_move_negligible<T: Scalar>(tip_move_m: T, length_m: T, toleran
 }
 
 /// The tip move the scalar type resolves on a rod of `length_m`: the shooting tolerance (an angle)
-/// times the length (37 um for f32 on a 39 cm rod).
+/// times the length (9.4 um for f32 on a 39 cm rod).
 pub(crate) fn tip_floor_m<T: Scalar>(length_m: T) -> T {
     length_m * default_tolerance::<T>()
 }

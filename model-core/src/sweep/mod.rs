@@ -201,6 +201,31 @@ fn observe<T: Scalar, O: RodOde<T, K>, const K: usize>(
     pose
 }
 
+/// Writes the shape points asked for in `[s, s_next)` (the step from `s` in progress, on an interval
+/// with coefficients `field`); returns the next query (beyond the tip when there is none). Out of
+/// line: the step loop stays small.
+#[inline(never)]
+fn write_shape<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    field: &O::Field,
+    s: T,
+    s_next: T,
+    y: &O::State,
+    sink: &mut ShapeSink<'_, T>,
+) -> T {
+    while let Some(q) = sink.next_query().filter(|q| *q < s_next) {
+        let mut at_q = if q > s {
+            rk4::step(ode, field, s, q - s, y, None)
+        } else {
+            *y
+        };
+        ode.after_step(&mut at_q, &mut []);
+        sink.write(ode.shape_point(q, &at_q, field));
+    }
+    sink.next_query()
+        .unwrap_or_else(|| ode.length_m() + ode.length_m())
+}
+
 /// Integrates `ode` from base to tip at unknowns `x` with the tangents `which`, writing shape points
 /// into `shape` when given.
 pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
@@ -230,6 +255,12 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
     let mut stages = [ode.blank_stage(); 4];
     let mut track = ode.track();
     let mut proximal: Option<O::Field> = None;
+    // The next shape query (beyond the tip when there is none): one comparison per step.
+    let beyond = ode.length_m() + ode.length_m();
+    let mut next_shape_m = shape
+        .as_deref()
+        .and_then(ShapeSink::next_query)
+        .unwrap_or(beyond);
 
     for (k, interval) in grid.intervals.iter().enumerate() {
         let Some(field) = ode.field(interval) else {
@@ -257,25 +288,17 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
             } else {
                 s0 + len * (T::lit(f64::from(i)) / steps)
             };
-            if let Some(sink) = shape.as_deref_mut() {
-                while let Some(q) = sink.next_query().filter(|q| *q < s_next) {
-                    let mut at_q = if q > s {
-                        rk4::step(ode, &field, s, q - s, &y, None)
-                    } else {
-                        y
-                    };
-                    ode.after_step(&mut at_q, &mut []);
-                    sink.write(ode.shape_point(q, &at_q, &field));
-                }
+            if next_shape_m < s_next
+                && let Some(sink) = shape.as_deref_mut()
+            {
+                next_shape_m = write_shape(ode, &field, s, s_next, &y, sink);
             }
             let h = s_next - s;
             if tan.is_empty() {
                 y = rk4::step(ode, &field, s, h, &y, None);
             } else {
                 y = rk4::step(ode, &field, s, h, &y, Some(&mut stages));
-                for (t, seed) in tan.iter_mut().zip(seeds) {
-                    *t = rk4::tangent_step(ode, &field, &stages, seed, h, t);
-                }
+                rk4::tangent_steps(ode, &field, &stages, seeds, h, tan);
             }
             ode.after_step(&mut y, tan);
             if which.track_stability

@@ -49,3 +49,19 @@ pub(crate) fn tangent_step<T: Scalar, O: RodOde<T, K>, const K: usize>(
     let k4 = ode.tangent_rate(f, s4, seed, &t.axpy(&k3, h));
     t.rk4(&[k1, k2, k3, k4], h)
 }
+
+/// Every tangent's RK4 step over the stages of the state's step (out of line: the sweep's step loop
+/// stays small).
+#[inline(never)]
+pub(crate) fn tangent_steps<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    f: &O::Field,
+    stages: &[O::Stage; 4],
+    seeds: &[O::Seed],
+    h: T,
+    tangents: &mut [O::Tangent],
+) {
+    for (t, seed) in tangents.iter_mut().zip(seeds) {
+        *t = tangent_step(ode, f, stages, seed, h, t);
+    }
+}
