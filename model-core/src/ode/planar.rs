@@ -5,10 +5,10 @@
 //! `r' = v_t t + v_n t_perp`, `t' = k t_perp`, `E I k' = -(r' x n)_z`,
 //! `v_t = 1 + n.t / E A`, `v_n = n.t_perp / G A` (or `1, 0` for a Kirchhoff rod),
 //!
-//! with `t = (c, s)`, `t_perp = (-s, c)`: five states instead of the 3D rod's ten (quaternion) to fifteen (rotation matrix), no frame to
-//! orthonormalise
-//! (the direction is renormalised after each step), one shooting unknown `k(0)`. Cable holes rotate
-//! with the frame about the plane's normal, so cable lengths and the 3D shape follow exactly.
+//! with `t = (c, s)`, `t_perp = (-s, c)`: five states instead of the 3D rod's ten (quaternion) to
+//! fifteen (rotation matrix), no frame to orthonormalise (the direction is renormalised after each
+//! step), one shooting unknown `k(0)`. Cable holes rotate with the frame about the plane's normal, so
+//! cable lengths and the 3D shape follow exactly.
 //!
 //! Linearised (a tangent `(dr, dt, dk)`): `dr' = dt v_t + t dv_t + dt_perp v_n + t_perp dv_n`,
 //! `dt' = t_perp dk + dt_perp k`, `E I dk' = -(dr' x n)_z`, with `dv_t = n.dt / E A`,
