@@ -15,6 +15,7 @@ mod cases;
 mod findings;
 mod mcu;
 mod measure;
+mod numbers;
 mod pareto;
 mod plot;
 mod reductions;

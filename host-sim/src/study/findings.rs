@@ -3,9 +3,9 @@
 
 use super::Study;
 use super::measure::Row;
+use super::numbers::{sig, us};
 use super::reductions::MAIN_TOLERANCE_M;
 use super::variants::{Arithmetic, Family, Frame, Reduction};
-use super::write::{sig, us};
 
 /// The reference family with another arithmetic, frame or reduction.
 pub fn family(arithmetic: Arithmetic, frame: Frame, reduction: Reduction) -> Family {
