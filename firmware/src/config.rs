@@ -169,8 +169,24 @@ pub fn metres_per_count() -> f32 {
     spools::<f32>()[0].metres_per_count()
 }
 
-/// The loop's settings: measurement noise from the encoder resolution, three sweeps per tick,
-/// backbone points at the quarters of the rod.
+/// The model's own error at [`STEPS_PER_SECTION`], m (one standard deviation), in a cable length
+/// and in the tip position: its discretisation against the converged model over the loads the robot
+/// meets, with a margin of two (measured by `checks::tests::the_model_error_is_covered`: 0.15 um
+/// and 0.15 um at 20 steps). The f32 floor (0.24 um, 9.4 um) is added by model-core.
+pub const MODEL_LENGTH_STD_M: f32 = 4.0e-7;
+/// See [`MODEL_LENGTH_STD_M`].
+pub const MODEL_TIP_STD_M: f32 = 4.0e-7;
+
+/// The largest tip load the estimator looks for other answers at, in buckling scales (`E I / L^2`,
+/// 0.12 N on the bench): 16, about 1.9 N, four times the largest load of the recording.
+pub const SCAN_REACH: f32 = 16.0;
+
+/// Sweeps one cold estimate may take: its cost bound (about 172 k instructions a sweep at 20
+/// steps, so 19 M instructions, within the 20 M the loop allows a restart).
+pub const COLD_SWEEPS: u16 = 110;
+
+/// The loop's settings: measurement noise from the encoder resolution and the model's own error,
+/// five sweeps per tick, backbone points at the quarters of the rod.
 pub fn loop_config() -> LoopConfig {
     let quarter = ROD_LENGTH_M as f32 / SHAPE_POINTS as f32;
     LoopConfig {
@@ -178,8 +194,14 @@ pub fn loop_config() -> LoopConfig {
         max_cable_speed_m_per_s: MAX_CABLE_SPEED_M_PER_S,
         step_margin_m: STEP_MARGIN_M,
         estimator: EstimatorSettings {
-            max_sweeps: 4,
-            ..EstimatorSettings::with_inverse(InverseSettings::with_resolution(metres_per_count()))
+            max_sweeps: 5,
+            ..EstimatorSettings::with_inverse(InverseSettings {
+                model_length_std_m: MODEL_LENGTH_STD_M,
+                model_tip_std_m: MODEL_TIP_STD_M,
+                scan_reach: SCAN_REACH,
+                max_sweeps: COLD_SWEEPS,
+                ..InverseSettings::with_resolution(metres_per_count())
+            })
         },
         shape_s_m: core::array::from_fn(|i| quarter * (i + 1) as f32),
         restart_after: 3,

@@ -3,13 +3,11 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-#[cfg(feature = "identifiability")]
-use crate::MAX_CABLES;
-use crate::Scalar;
 use crate::error::{ModelError, finite_vec, positive};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
+use crate::{MAX_CABLES, Scalar};
 
 /// The number of load parameters an estimate can have (1 to 3). nalgebra's singular value
 /// decomposition behind [`Quality`] needs a concrete size, so each is listed here.
@@ -18,6 +16,11 @@ pub trait ParamCount<T: Scalar, const P: usize> {
     /// `None` if the decomposition does not converge.
     #[cfg(feature = "identifiability")]
     fn svd(m: SMatrix<T, MAX_CABLES, P>) -> Option<(SVector<T, P>, SMatrix<T, P, P>)>;
+
+    /// `(G^T G + diag(w)^2)^-1` from a QR factorisation of the stacked `[G; diag(w)]` (`R^-1 R^-T`),
+    /// which keeps the precision the normal equations lose when `G`'s entries dwarf `w`. `None` when
+    /// `R` is singular.
+    fn covariance(g: &SMatrix<T, MAX_CABLES, P>, w: &SVector<T, P>) -> Option<SMatrix<T, P, P>>;
 }
 
 /// The marker implementing [`ParamCount`] for the supported sizes.
@@ -27,6 +30,21 @@ pub struct Params;
 macro_rules! param_count {
     ($($p:literal),*) => {$(
         impl<T: Scalar> ParamCount<T, $p> for Params {
+            fn covariance(
+                g: &SMatrix<T, MAX_CABLES, $p>,
+                w: &SVector<T, $p>,
+            ) -> Option<SMatrix<T, $p, $p>> {
+                let mut stacked = SMatrix::<T, { MAX_CABLES + $p }, $p>::zeros();
+                stacked.fixed_view_mut::<MAX_CABLES, $p>(0, 0).copy_from(g);
+                stacked
+                    .fixed_view_mut::<$p, $p>(MAX_CABLES, 0)
+                    .copy_from(&SMatrix::<T, $p, $p>::from_diagonal(w));
+                let r = stacked.qr().r();
+                let r_inv = r.solve_upper_triangular(&SMatrix::<T, $p, $p>::identity())?;
+                let covariance = r_inv * r_inv.transpose();
+                crate::scalar::all_finite(&covariance).then_some(covariance)
+            }
+
             #[cfg(feature = "identifiability")]
             fn svd(m: SMatrix<T, MAX_CABLES, $p>) -> Option<(SVector<T, $p>, SMatrix<T, $p, $p>)> {
                 let svd = nalgebra::SVD::try_new(m, false, true, T::default_epsilon(), 200)?;

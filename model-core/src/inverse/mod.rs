@@ -46,6 +46,10 @@ pub type CableVector<T> = SVector<T, MAX_CABLES>;
 pub struct InverseSettings<T> {
     /// Iterations (each one sweep with six tangents).
     pub max_iterations: u16,
+    /// Most sweeps one estimate may take, the cold forward solve at its start included: the bound on
+    /// its cost, whatever the measurements (data no load explains included). Reaching it ends the
+    /// solve with [`crate::Termination::IterationLimit`].
+    pub max_sweeps: u16,
     /// Tolerance on the dimensionless tip-moment residual (as in [`ShootingSettings::tolerance`]).
     pub tolerance: T,
     /// Cable mismatch below which the fit is exact, m.
@@ -56,6 +60,16 @@ pub struct InverseSettings<T> {
     /// Standard deviation of one cable-length measurement, m (for an encoder of resolution `q`,
     /// `q / sqrt(12)`; see [`InverseSettings::with_resolution`]).
     pub length_std_m: T,
+    /// The model's own error in a cable length, m (one standard deviation): its discretisation on
+    /// this grid against the converged model (`report/accuracy_cost.md` measures it per step count).
+    /// Added to the measurement's in quadrature, with the floor of the scalar type (the shooting
+    /// tolerance times the cable radius: 0.24 um in f32 on the bench, negligible in f64), so that
+    /// neither the fit nor the reported uncertainty claims more than the model resolves.
+    pub model_length_std_m: T,
+    /// The model's own error in the tip position, m (one standard deviation), added to the reported
+    /// tip uncertainty in quadrature with the scalar type's floor (the shooting tolerance times the
+    /// rod's length: 9.4 um in f32 on the bench).
+    pub model_tip_std_m: T,
     /// A load component whose standard deviation exceeds this, N, makes the estimate
     /// [`Determination::Weak`].
     pub max_force_std_n: T,
@@ -74,6 +88,11 @@ pub struct InverseSettings<T> {
     /// fits, and changes well-determined directions negligibly. The identifiability figures in
     /// [`Quality`] (singular values, condition number, [`Determination`]) stay those of the data alone.
     pub prior_std_scale: T,
+    /// How far, in buckling scales, the search for other answers explaining the measurements reaches
+    /// (at least three times the answer's own load): an answer is called determined only when no other
+    /// answer within this reach fits the data about as well. A load beyond it that fits as well as the
+    /// answer goes unseen: set it to the largest load the robot can meet.
+    pub scan_reach: T,
 }
 
 impl<T: Scalar> Default for InverseSettings<T> {
@@ -81,15 +100,19 @@ impl<T: Scalar> Default for InverseSettings<T> {
         let eps = T::default_epsilon();
         Self {
             max_iterations: 60,
+            max_sweeps: 250,
             tolerance: default_tolerance(),
             length_tolerance_m: (eps * T::lit(10.0)).max(T::lit(1e-12)),
             step_tolerance_sigma: T::lit(1e-4),
             length_std_m: T::lit(1e-6),
+            model_length_std_m: T::zero(),
+            model_tip_std_m: T::zero(),
             max_force_std_n: T::lit(0.05),
             max_rotation_step_rad: T::lit(1.0),
             check_stability: true,
             tip_tolerance_m: T::lit(1e-7),
             prior_std_scale: T::lit(10.0),
+            scan_reach: T::lit(48.0),
         }
     }
 }
@@ -104,13 +127,19 @@ impl<T: Scalar> InverseSettings<T> {
     }
 
     pub(crate) fn validate(&self) -> Result<(), ModelError> {
+        if self.max_sweeps == 0 {
+            return Err(ModelError::NotPositive("inverse sweep budget"));
+        }
         positive(self.tolerance, "inverse tolerance")?;
         positive(self.length_tolerance_m, "length tolerance")?;
         positive(self.step_tolerance_sigma, "step tolerance")?;
         positive(self.length_std_m, "length standard deviation")?;
+        crate::error::non_negative(self.model_length_std_m, "model length standard deviation")?;
+        crate::error::non_negative(self.model_tip_std_m, "model tip standard deviation")?;
         positive(self.max_force_std_n, "force standard deviation limit")?;
         positive(self.max_rotation_step_rad, "trust region")?;
         positive(self.tip_tolerance_m, "tip tolerance")?;
+        positive(self.scan_reach, "scan reach")?;
         // Infinity (no prior) is allowed; NaN, zero and negative are not.
         if self.prior_std_scale.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
             return Err(ModelError::NotPositive("prior standard deviation"));

@@ -5,7 +5,7 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::basis::{ParamCount, Params};
-use super::reduced::{Linearization, Problem, Reduced};
+use super::reduced::{Linearization, Problem, Reduced, Widen};
 use crate::Scalar;
 use crate::kinematics::Attitude;
 
@@ -22,6 +22,25 @@ pub enum Determination {
     Undetermined,
     /// No load of the model explains the measurements within three standard deviations.
     Inconsistent,
+    /// Two or more loads far apart explain the measurements about as well (three cables and three
+    /// force components admit several exact fits): the answer is the one the prior prefers, and the
+    /// data alone cannot tell.
+    Ambiguous,
+    /// The search for other answers ran out of its sweep budget
+    /// ([`crate::inverse::InverseSettings::max_sweeps`]) before it could rule them out: the answer
+    /// may be one of several.
+    Unverified,
+}
+
+impl Determination {
+    /// This verdict, with `Determined` lowered to `to` (the others already say the answer is not
+    /// determined).
+    pub fn at_best(self, to: Self) -> Self {
+        match self {
+            Self::Determined => to,
+            other => other,
+        }
+    }
 }
 
 /// What the measurements say about the load, at the estimate.
@@ -62,11 +81,12 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
         &self,
         lin: &Linearization<T, P>,
         red: Option<&Reduced<T, P>>,
+        widen: Option<&Widen<T, P>>,
     ) -> Quality<T, P>
     where
         Params: ParamCount<T, P>,
     {
-        let inv_std = T::one() / self.settings.length_std_m;
+        let inv_std = T::one() / self.length_std_m;
         let residual_rms_sigma = if self.cables > 0 {
             (lin.rc.norm_squared() / T::lit(self.cables as f64)).sqrt() * inv_std
         } else {
@@ -105,10 +125,25 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
                 _ => return quality,
             }
         } else {
-            match self.information(red).cholesky() {
-                Some(c) => c.inverse(),
+            // The inverse information from a QR factorisation of the whitened system `[G / s; W]`,
+            // not from `G^T G / s^2 + W^2`: near the buckling load G's entries are huge and the
+            // normal matrix loses the prior's rows to rounding.
+            match Params::covariance(&red.g, &self.prior_weight) {
+                Some(c) => c,
                 None => return quality,
             }
+        };
+        let covariance = match widen {
+            Some(w) => {
+                let along = (w.direction.transpose() * covariance * w.direction).x;
+                let extra = w.std * w.std - along;
+                if extra > T::zero() {
+                    covariance + w.direction * w.direction.transpose() * extra
+                } else {
+                    covariance
+                }
+            }
+            None => covariance,
         };
         quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
         let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
@@ -116,7 +151,10 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
         // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
         let d_tip = lin.d_tip_p - lin.d_tip_u * red.a;
         let tip_cov = d_tip * covariance * d_tip.transpose();
-        quality.tip_std_m = tip_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        let model_tip = self.model_tip_std_m * self.model_tip_std_m;
+        quality.tip_std_m = tip_cov
+            .diagonal()
+            .map(|v| (v.max(T::zero()) + model_tip).sqrt());
         let moment_cov = self.basis.moment_nm * covariance * self.basis.moment_nm.transpose();
         let worst = quality
             .force_std_n
@@ -176,9 +214,12 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
     /// determine only numerically badly then shows as [`Determination::Weak`] through its standard
     /// deviation rather than as [`Determination::Undetermined`].
     #[cfg(not(feature = "identifiability"))]
-    fn data_only(&self, red: &Reduced<T, P>, _: &mut Quality<T, P>) -> Option<DataOnly<T, P>> {
+    fn data_only(&self, red: &Reduced<T, P>, _: &mut Quality<T, P>) -> Option<DataOnly<T, P>>
+    where
+        Params: ParamCount<T, P>,
+    {
         let covariance = (self.cables >= P)
-            .then(|| red.g.tr_mul(&red.g).cholesky().map(|c| c.inverse()))
+            .then(|| Params::covariance(&red.g, &SVector::zeros()))
             .flatten();
         Some(DataOnly {
             rank_deficient: covariance.is_none(),

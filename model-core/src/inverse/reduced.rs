@@ -16,22 +16,101 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use super::basis::{LoadBasis, ParamCount, Params, prior_weight_for};
-use super::{CableVector, Estimate, InverseSettings};
+use super::{CableVector, Determination, Estimate, InverseSettings};
 use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::ode::Family;
 use crate::ode::dead_load::DeadLoadRod;
 use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
-use crate::scalar::from_columns;
 use crate::shape::ShapeSink;
-use crate::solve::newton::{NewtonOptions, Work, newton};
-use crate::solve::stopping;
+use crate::solve::newton::{NewtonOptions, Work, newton_in_place};
+use crate::solve::stopping::{self, default_tolerance};
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet, sweep};
 use crate::{MAX_CABLES, Scalar};
 
 /// Newton iterations (each one sweep) a projection back onto the equilibrium may take.
 const PROJECTION_ITERATIONS: u16 = 8;
+
+/// The continuation in the prior starts this many times tighter than the final prior.
+const PRIOR_START: f64 = 256.0;
+
+/// Each level of that continuation loosens the prior by this factor.
+const PRIOR_STEP: f64 = 0.25;
+
+/// Gauss-Newton iterations at most per level.
+const PRIOR_ITERATIONS: u16 = 6;
+
+/// A level is settled when the next step would lower the merit (in squared standard deviations) by
+/// less than this.
+const PRIOR_SETTLED: f64 = 0.01;
+
+/// On the way to the answer (the prior's continuation, the profile), iterates are brought back onto
+/// the equilibrium only to this many times the reduced model's final tolerance: their merit need not
+/// be exact, and a tight projection costs sweeps at every step.
+const LOOSE_PROJECTION: f64 = 10.0;
+
+/// Sweeps kept for the search for other answers out of [`InverseSettings::max_sweeps`].
+const SCAN_SWEEPS: u16 = 40;
+
+/// The profile reaches loads this many times the answer's (in buckling scales), or
+/// [`InverseSettings::scan_reach`] buckling scales, whichever is larger.
+const SCAN_FACTOR: f64 = 3.0;
+
+/// The profile's first step, as a fraction of the answer's load (at least one buckling scale).
+const SCAN_FIRST: f64 = 0.125;
+
+/// Each step of the profile is this many times the last (halved where a point is not reached).
+const SCAN_GROWTH: f64 = 1.5;
+
+/// Damped Gauss-Newton steps at most per point of the profile.
+const SCAN_ITERATIONS: u16 = 2;
+
+/// Another answer whose misfit is within this many squared standard deviations of the answer's
+/// explains the data as well (three standard deviations in one direction).
+const ALTERNATIVE_CHI2: f64 = 9.0;
+
+/// Sweeps at most for the unconstrained solve from a point of the profile.
+const SETTLE_SWEEPS: u16 = 15;
+
+/// Power iterations for the weakest direction.
+const WEAKEST_ITERATIONS: u16 = 30;
+
+/// The posterior's standard deviation along a unit direction of the parameters, where the profile
+/// of the merit along it (the other parameters re-solved) rises more slowly than the linearisation
+/// at the answer predicts: near the buckling load a tiny axial change moves the cables a lot to
+/// first order, and the linearised standard deviation can be ten times too small.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Widen<T, const P: usize> {
+    pub(super) direction: SVector<T, P>,
+    pub(super) std: T,
+}
+
+/// What the search for other answers found, once its leads are followed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scan {
+    /// No other answer within its reach.
+    Unique,
+    /// Another answer explains the data about as well.
+    Ambiguous,
+    /// Another answer scores better and replaced the first; `true` when the first explains the
+    /// data about as well.
+    Better(bool),
+    /// The budget ran out before the search was done.
+    Incomplete,
+}
+
+/// Where the profile along the weakest direction suggests other answers: on each side, the lowest
+/// point of a descent past a crest (on the equilibrium at its own load).
+struct Leads<T, const P: usize> {
+    starts: [Option<Point<T, P>>; 2],
+    /// The posterior's width along the profile's direction, where the profile measured it.
+    widen: Option<Widen<T, P>>,
+}
+
+/// The sweep budget ran out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct OutOfBudget;
 
 /// The linearisation of the residuals at one point.
 #[derive(Clone, Copy, Debug)]
@@ -111,6 +190,24 @@ pub(super) struct Problem<'a, T: Scalar, A: Attitude<T>, const P: usize, const N
     /// The largest tip-moment residual (dimensionless) at which the reduced model is trusted: its
     /// second-order cable error, about `r e^2`, stays below a tenth of a standard deviation.
     pub(super) max_moment_residual: T,
+    /// A profile's constraint on the parameters, when this problem is one point of a profile.
+    pub(super) fix: Option<Fix<T, P>>,
+    /// One standard deviation of a cable length as the fit weighs it, m: the measurement's, the
+    /// model's own and the scalar type's floor, in quadrature.
+    pub(super) length_std_m: T,
+    /// The same for the tip position, m: the model's own and the floor (the measurement's part comes
+    /// from the load's covariance).
+    pub(super) model_tip_std_m: T,
+    /// `1 / D` for each parameter, `D` its buckling scale (`E I / L^2` of force, `E I / L` of moment
+    /// per unit parameter): distances between answers are measured in these units.
+    pub(super) buckling_weight: SVector<T, P>,
+}
+
+/// The constraint `v.p = a` of one point of a profile along the unit vector `v`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Fix<T, const P: usize> {
+    pub(super) direction: SVector<T, P>,
+    pub(super) value: T,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
@@ -122,6 +219,16 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         measured: CableVector<T>,
         settings: InverseSettings<T>,
     ) -> Self {
+        let radius = model
+            .rod()
+            .cables
+            .iter()
+            .fold(T::zero(), |r, c| r.max(c.radius_m()));
+        let floor = radius * default_tolerance::<T>();
+        let length_std_m = (settings.length_std_m * settings.length_std_m
+            + settings.model_length_std_m * settings.model_length_std_m
+            + floor * floor)
+            .sqrt();
         Self {
             model,
             basis,
@@ -129,29 +236,24 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             settings,
             cables: model.rod().cables.len(),
             prior_weight: prior_weight(model, &basis, &settings),
-            max_moment_residual: {
-                let radius = model
-                    .rod()
-                    .cables
-                    .iter()
-                    .fold(T::zero(), |r, c| r.max(c.radius_m()));
-                (settings.length_std_m * T::lit(0.1) / radius).sqrt()
+            max_moment_residual: (length_std_m * T::lit(0.1) / radius).sqrt(),
+            fix: None,
+            length_std_m,
+            model_tip_std_m: {
+                let floor = stopping::tip_floor_m(model.length_m());
+                (settings.model_tip_std_m * settings.model_tip_std_m + floor * floor).sqrt()
             },
+            buckling_weight: prior_weight_for(model, &basis, T::one()),
         }
     }
 
     /// Brings a point back onto the equilibrium at its load when its tip-moment residual is too large
     /// for the reduced model: the forward solve's Newton iteration on the base strain alone (variable
-    /// projection), to the residual the reduced model trusts. `sw` is the (finite) sweep at `x`.
-    /// Returns the projected point and its linearisation, or `None` if that does not converge.
-    pub(super) fn project(
-        &self,
-        mut x: Point<T, P>,
-        sw: Sweep<T, 3>,
-        work: &mut Work,
-    ) -> Option<(Point<T, P>, Linearization<T, P>)> {
+    /// projection), to the residual the reduced model trusts. `sw` is the (finite) sweep at `x`;
+    /// both follow the projection. False if it does not converge.
+    fn project(&self, x: &mut Point<T, P>, sw: &mut Sweep<T, 3>, work: &mut Work) -> bool {
         if self.moment_residual(&sw.residual) <= self.max_moment_residual {
-            return Some((x, self.linearize(&sw)));
+            return true;
         }
         let options = NewtonOptions {
             tolerance: self.max_moment_residual,
@@ -161,30 +263,10 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             tangents: self.tangents(),
         };
         let mut inner = Work::default();
-        let out = newton(&self.ode(&x.p), x.u0, Some(sw), &options, &mut inner);
+        let (_, termination) =
+            newton_in_place(&self.ode(&x.p), &mut x.u0, sw, &options, &mut inner);
         work.sweeps = work.sweeps.saturating_add(inner.sweeps);
-        if !out.termination.is_success() {
-            return None;
-        }
-        x.u0 = out.x;
-        Some((x, self.linearize(&out.sweep)))
-    }
-
-    /// The same problem with other prior weights.
-    pub(super) fn with_prior(&self, prior_weight: SVector<T, P>) -> Self {
-        Self {
-            prior_weight,
-            ..*self
-        }
-    }
-
-    /// The graduated prior's weights at relaxation `relax` (1 at the start, halving): the start weights
-    /// scaled down, but never below the final prior's; tiny ones become the final ones.
-    pub(super) fn graduated(&self, start: &SVector<T, P>, relax: T) -> SVector<T, P> {
-        if relax < T::lit(1e-6) {
-            return self.prior_weight;
-        }
-        start.zip_map(&self.prior_weight, |s, f| (s * relax).max(f))
+        termination.is_success()
     }
 
     /// The rod equations at load parameters `p`.
@@ -232,32 +314,23 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
 
     pub(super) fn linearize(&self, sw: &Sweep<T, 3>) -> Linearization<T, P> {
         let (u, f) = (Family::Unknown, Family::TipForce);
-        let j_eu = from_columns(|j| sw.d_residual(u, j));
-        let j_ef: Matrix3<T> = from_columns(|j| sw.d_residual(f, j));
+        let j_ef: Matrix3<T> = sw.residual_block(f);
         // e = C u - R^T tau: d e / d tau = -R^T.
         let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
-        let cable = |c: usize, family: Family, j: usize| {
-            if c < self.cables {
-                sw.d_cable_length(c, family, j)
-            } else {
-                T::zero()
-            }
-        };
-        let j_cu = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, u, j));
-        let j_cf = SMatrix::<T, MAX_CABLES, 3>::from_fn(|c, j| cable(c, f, j));
-        let tip = |family: Family| -> Matrix3<T> { from_columns(|j| sw.d_position(family, j)) };
+        let j_cf: SMatrix<T, MAX_CABLES, 3> = sw.cable_block(f);
+        let d_tip_f: Matrix3<T> = sw.position_block(f);
         Linearization {
             e: sw.residual,
             rc: self.cable_residual(sw),
-            j_eu,
+            j_eu: sw.residual_block(u),
             j_ep,
-            j_cu,
+            j_cu: sw.cable_block(u),
             j_cp: j_cf * self.basis.force_n,
             tip_position_m: sw.tip_position_m,
             tip_rotation: sw.tip_rotation,
-            d_tip_u: tip(u),
-            d_tip_p: tip(f) * self.basis.force_n,
-            d_theta_tip_u: from_columns(|j| sw.d_rotation(u, j)),
+            d_tip_u: sw.position_block(u),
+            d_tip_p: d_tip_f * self.basis.force_n,
+            d_theta_tip_u: sw.rotation_block(u),
             conjugate_point_m: sw.conjugate_point_m,
             frame_drift: sw.frame_drift,
         }
@@ -267,7 +340,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let lu = lin.j_eu.lu();
         let a = lu.solve(&lin.j_ep)?;
         let b = lu.solve(&lin.e)?;
-        let inv_std = T::one() / self.settings.length_std_m;
+        let inv_std = T::one() / self.length_std_m;
         let g = (lin.j_cp - lin.j_cu * a) * inv_std;
         let c = (lin.rc - lin.j_cu * b) * inv_std;
         let ok = crate::scalar::all_finite(&g)
@@ -283,8 +356,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
     pub(super) fn merit(&self, p: &SVector<T, P>, lin: &Linearization<T, P>) -> T {
         self.reduce(lin).map_or_else(
             || T::max_value().unwrap_or_else(T::one),
-            |red| red.c.norm_squared() + p.component_mul(&self.prior_weight).norm_squared(),
+            |red| red.c.norm_squared() + self.penalty(p),
         )
+    }
+
+    /// The prior's quadratic form `|W p|^2`.
+    fn penalty(&self, p: &SVector<T, P>) -> T {
+        p.component_mul(&self.prior_weight).norm_squared()
     }
 
     /// Whether the equilibrium at a linearisation may be accepted: not found unstable (an unstable
@@ -311,16 +389,21 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         p: &SVector<T, P>,
         dp: &SVector<T, P>,
     ) -> T {
-        let w = &self.prior_weight;
-        red.c.norm_squared() + p.component_mul(w).norm_squared()
+        red.c.norm_squared() + self.penalty(p)
             - (red.c + red.g * dp).norm_squared()
-            - (p + dp).component_mul(w).norm_squared()
+            - self.penalty(&(p + dp))
     }
 
     /// The information matrix `G^T G / s^2 + W^2` (data and prior).
     pub(super) fn information(&self, red: &Reduced<T, P>) -> SMatrix<T, P, P> {
         let w2 = self.prior_weight.component_mul(&self.prior_weight);
         red.g.tr_mul(&red.g) + SMatrix::from_diagonal(&w2)
+    }
+
+    /// The merit's gradient (halved): `G^T c~ + W^2 p`.
+    fn gradient(&self, red: &Reduced<T, P>, p: &SVector<T, P>) -> SVector<T, P> {
+        let w2 = self.prior_weight.component_mul(&self.prior_weight);
+        red.g.tr_mul(&red.c) + w2.component_mul(p)
     }
 
     /// The damped step from `p` (`mu = 0`: Gauss-Newton), limited by the trust region on the base
@@ -335,12 +418,25 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         mu: T,
     ) -> Option<(Vector3<T>, SVector<T, P>)> {
         let normal = self.information(red);
-        let w2 = self.prior_weight.component_mul(&self.prior_weight);
-        let gradient = red.g.tr_mul(&red.c) + w2.component_mul(p);
+        let gradient = self.gradient(red, p);
         // A tiny ridge keeps an undetermined direction from blowing the step up; LM damping on top.
         let ridge = normal.diagonal().max().max(T::one()) * T::default_epsilon() * T::lit(16.0);
         let damped = normal + SMatrix::from_diagonal(&(normal.diagonal() * mu).add_scalar(ridge));
-        let dp = damped.cholesky()?.solve(&-gradient);
+        let dp = match self.fix {
+            None => damped.cholesky()?.solve(&-gradient),
+            Some(fix) => {
+                // On the constraint `v.p = a`: the smallest change onto it, then the best change
+                // along it (the null-space method: `v` is held out of the system by its own pivot).
+                let v = fix.direction;
+                let onto = v * (fix.value - v.dot(p));
+                let across = SMatrix::<T, P, P>::identity() - v * v.transpose();
+                let system = across * damped * across + v * v.transpose() * damped.diagonal().max();
+                let z = system
+                    .cholesky()?
+                    .solve(&-(across * (gradient + normal * onto)));
+                onto + across * z
+            }
+        };
         let length = self.model.length_m();
         let limit = self.settings.max_rotation_step_rad;
         let restore = -red.b;
@@ -422,10 +518,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let fit_tolerance = self
             .settings
             .step_tolerance_sigma
-            .max(stopping::fit_floor_sigma(
-                length,
-                self.settings.length_std_m,
-            ));
+            .max(stopping::fit_floor_sigma(length, self.length_std_m));
         let done = moment_ok
             && tip_move + remaining <= self.settings.tip_tolerance_m.max(tip_floor)
             && fit_move <= fit_tolerance;
@@ -446,113 +539,473 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
 where
     Params: ParamCount<T, P>,
 {
+    /// The inverse from `x`, an equilibrium at its own load (a cold forward solve at the start
+    /// parameters, or a previous estimate), to the maximum a posteriori estimate:
+    ///
+    /// 1. continuation in the prior, from a prior [`PRIOR_START`] times tighter than the final one
+    ///    down to it ([`Problem::follow_prior`]): a tight prior holds the load near the start, where
+    ///    the problem is nearly linear and its answer unique, and each loosening moves the answer
+    ///    along its branch. From the start alone, a Gauss-Newton step takes the linear model's word
+    ///    that a small lateral load is a large axial one (both bend the sagging rod alike to first
+    ///    order) and can settle on that far answer;
+    /// 2. Levenberg-Marquardt to convergence ([`Problem::refine`]);
+    /// 3. a search for other answers that explain the measurements, along the direction the data
+    ///    determine worst ([`Problem::alternatives`]): three cables and three force components admit
+    ///    several exact fits (a small load and a large tension; two tensions). The one the prior
+    ///    prefers is returned; when another fits the data about as well, the verdict says so
+    ///    ([`Determination::Ambiguous`]) instead of calling either answer determined, and when the
+    ///    budget runs out before the search is done, that too ([`Determination::Unverified`]).
     pub(super) fn solve(&self, mut x: Point<T, P>, mut work: Work) -> Estimate<T, P> {
-        work.sweeps = work.sweeps.saturating_add(1);
-        let sw = self.full_sweep(&x);
-        if !sw.finite {
-            let lin = self.linearize(&sw);
+        let Some(mut lin) = self.linearize_at(&x, &mut work) else {
+            let lin = Linearization::empty();
             return self.finish(x, &lin, Termination::NonFinite, work);
+        };
+        // The scan's sweeps are kept out of the budget of the solve itself.
+        let budget = self.settings.max_sweeps.saturating_sub(SCAN_SWEEPS);
+        let termination = match self.follow_prior(&mut x, &mut lin, budget, &mut work) {
+            Ok(()) => self.refine(&mut x, &mut lin, budget, &mut work),
+            Err(stopped) => stopped,
+        };
+        if !termination.is_success() {
+            return self.finish(x, &lin, termination, work);
         }
-        let mut lin = self.linearize(&sw);
-        // A graduated prior: the first steps hold the load to a tenth of the buckling scale, then the
-        // prior relaxes by half each accepted step to its final value. From a cold start the linear
-        // model can trade a large axial force for bending (at the sagging shape an axial force and a
-        // lateral one bend the rod alike); the tight start finds the bending-consistent answer first.
-        let start_weight = prior_weight_for(self.model, &self.basis, T::lit(0.1));
-        let mut relax = T::one();
-        let mut stage = self.with_prior(self.graduated(&start_weight, relax));
-        let mut merit = stage.merit(&x.p, &lin);
-        // Levenberg-Marquardt with Nielsen's damping update: the gain ratio (actual over predicted
-        // decrease) sets the damping. It starts as Gauss-Newton.
+        let limit = self.settings.max_sweeps;
+        let (scan, widen) = match self.alternatives(&x, &lin, limit, &mut work) {
+            Err(OutOfBudget) => (Scan::Incomplete, None),
+            Ok(leads) => {
+                let scan = self.weigh(&mut x, &mut lin, &leads.starts, limit, &mut work);
+                // A better answer elsewhere has its own width: this one's profile does not
+                // describe it.
+                let widen = if matches!(scan, Scan::Better(_)) {
+                    None
+                } else {
+                    leads.widen
+                };
+                (scan, widen)
+            }
+        };
+        let cap = match scan {
+            Scan::Unique | Scan::Better(false) => None,
+            Scan::Ambiguous | Scan::Better(true) => Some(Determination::Ambiguous),
+            Scan::Incomplete => Some(Determination::Unverified),
+        };
+        let mut out = self.finish_widened(x, &lin, termination, work, widen.as_ref());
+        if let Some(cap) = cap {
+            out.quality.determination = out.quality.determination.at_best(cap);
+        }
+        out
+    }
+
+    /// Continuation in the prior: from a prior [`PRIOR_START`] times tighter than the final one to
+    /// the final prior in factors of [`PRIOR_STEP`], up to [`PRIOR_ITERATIONS`] damped Gauss-Newton
+    /// steps at each level. Moves `x` to the point at the final prior, or to where it stopped and
+    /// says why.
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn follow_prior(
+        &self,
+        x: &mut Point<T, P>,
+        lin: &mut Linearization<T, P>,
+        budget: u16,
+        work: &mut Work,
+    ) -> Result<(), Termination> {
+        let mut scale = T::lit(PRIOR_START);
+        loop {
+            let stage = Self {
+                prior_weight: self.prior_weight * scale,
+                max_moment_residual: self.max_moment_residual * T::lit(LOOSE_PROJECTION),
+                ..*self
+            };
+            stage.damped_steps(x, lin, PRIOR_ITERATIONS, budget, work)?;
+            if scale <= T::one() {
+                return Ok(());
+            }
+            scale = (scale * T::lit(PRIOR_STEP)).max(T::one());
+        }
+    }
+
+    /// Up to `iterations` damped Gauss-Newton steps on this problem's merit from `x`, in place,
+    /// stopping early once the next step would gain less than [`PRIOR_SETTLED`]: the damping falls
+    /// by 4 after a step that lowers the merit and rises by 16 after one that does not. Fails when
+    /// the budget runs out or the system is singular.
+    fn damped_steps(
+        &self,
+        x: &mut Point<T, P>,
+        lin: &mut Linearization<T, P>,
+        iterations: u16,
+        budget: u16,
+        work: &mut Work,
+    ) -> Result<(), Termination> {
+        let mut mu = T::lit(1e-12);
+        for _ in 0..iterations {
+            if work.sweeps >= budget {
+                return Err(Termination::IterationLimit);
+            }
+            let red = self.reduce(lin).ok_or(Termination::Singular)?;
+            let step = self.step(&red, &x.p, mu).ok_or(Termination::Singular)?;
+            if self.predicted_decrease(&red, &x.p, &step.1) <= T::lit(PRIOR_SETTLED) {
+                break;
+            }
+            let before = self.merit(&x.p, lin);
+            mu = match self.try_step(x, lin, step, before, work) {
+                Some(_) => (mu * T::lit(0.25)).max(T::lit(1e-12)),
+                None => (mu * T::lit(16.0)).max(T::lit(1e-4)),
+            };
+        }
+        Ok(())
+    }
+
+    /// The linearisation at `x`, an equilibrium at its own load: one sweep with every tangent.
+    /// `None` when the sweep is not finite.
+    // Out of line: the sweep need not share a frame with the caller's locals.
+    #[inline(never)]
+    fn linearize_at(&self, x: &Point<T, P>, work: &mut Work) -> Option<Linearization<T, P>> {
+        work.sweeps = work.sweeps.saturating_add(1);
+        let sw = self.full_sweep(x);
+        sw.finite.then(|| self.linearize(&sw))
+    }
+
+    /// The step `(du, dp)` from `x`: the point after it, brought back onto the equilibrium at its
+    /// load, replaces `x` and `lin` when its merit is below `below`; returns that merit. `None`
+    /// (and `x`, `lin` unchanged) when the sweep or the projection fails, the equilibrium is
+    /// unstable or the merit is not below `below`.
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn try_step(
+        &self,
+        x: &mut Point<T, P>,
+        lin: &mut Linearization<T, P>,
+        (du, dp): (Vector3<T>, SVector<T, P>),
+        below: T,
+        work: &mut Work,
+    ) -> Option<T> {
+        work.iterations = work.iterations.saturating_add(1);
+        work.sweeps = work.sweeps.saturating_add(1);
+        let mut trial = Point {
+            u0: x.u0 + du,
+            p: x.p + dp,
+        };
+        let mut sw = self.full_sweep(&trial);
+        if !(sw.finite && self.project(&mut trial, &mut sw, work)) {
+            return None;
+        }
+        let trial_lin = self.linearize(&sw);
+        if !self.acceptable(&trial.p, &trial_lin) {
+            return None;
+        }
+        let merit = self.merit(&trial.p, &trial_lin);
+        (merit < below).then(|| {
+            (*x, *lin) = (trial, trial_lin);
+            merit
+        })
+    }
+
+    /// Levenberg-Marquardt to convergence from a point near the answer: Nielsen's damping update,
+    /// the gain ratio (actual over predicted decrease) setting the damping. Moves `x` (and its
+    /// linearisation) to where it stopped and says why.
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn refine(
+        &self,
+        x: &mut Point<T, P>,
+        lin: &mut Linearization<T, P>,
+        budget: u16,
+        work: &mut Work,
+    ) -> Termination {
+        let mut merit = self.merit(&x.p, lin);
         let mut mu = T::lit(1e-12);
         let mut nu = T::lit(2.0);
         let mut previous_tip_move = None;
         for _ in 0..self.settings.max_iterations {
-            let Some(red) = self.reduce(&lin) else {
-                return self.finish(x, &lin, Termination::Singular, work);
+            let Some(red) = self.reduce(lin) else {
+                return Termination::Singular;
             };
-            let final_stage = stage.prior_weight == self.prior_weight;
-            let (done, tip_move) = stage.converged(&x, &lin, &red, previous_tip_move);
-            if done && final_stage {
-                return self.finish(x, &lin, Termination::Converged, work);
-            }
+            let (done, tip_move) = self.converged(x, lin, &red, previous_tip_move);
             if done {
-                // The tight prior has found the basin: go to the final prior at once.
-                stage = *self;
-                merit = stage.merit(&x.p, &lin);
-                previous_tip_move = None;
-                continue;
+                return Termination::Converged;
             }
-            let Some((du, dp)) = stage.step(&red, &x.p, mu) else {
-                return self.finish(x, &lin, Termination::Singular, work);
+            if work.sweeps >= budget {
+                return Termination::IterationLimit;
+            }
+            let Some(step) = self.step(&red, &x.p, mu) else {
+                return Termination::Singular;
             };
-            work.iterations = work.iterations.saturating_add(1);
-            let trial = Point {
-                u0: x.u0 + du,
-                p: x.p + dp,
-            };
-            work.sweeps = work.sweeps.saturating_add(1);
-            let sw = self.full_sweep(&trial);
-            let projected = if sw.finite {
-                self.project(trial, sw, &mut work)
+            let predicted = self.predicted_decrease(&red, &x.p, &step.1);
+            // A step the linear model says cannot help is not tried.
+            let accepted = if predicted > T::zero() {
+                self.try_step(x, lin, step, merit, work)
             } else {
                 None
             };
-            let predicted = stage.predicted_decrease(&red, &x.p, &dp);
-            match projected.map(|(t, l)| {
-                let m = stage.merit(&t.p, &l);
-                (t, l, m)
-            }) {
-                Some((trial, l, m))
-                    if m < merit && predicted > T::zero() && self.acceptable(&trial.p, &l) =>
-                {
+            match accepted {
+                Some(m) => {
                     let rho = (merit - m) / predicted;
                     let t = T::lit(2.0) * rho - T::one();
                     mu = (mu * (T::one() - t * t * t).max(T::lit(1.0 / 3.0))).max(T::lit(1e-15));
                     nu = T::lit(2.0);
-                    (x, lin, merit) = (trial, l, m);
+                    merit = m;
                     previous_tip_move = Some(tip_move);
-                    if !final_stage {
-                        relax *= T::lit(0.5);
-                        stage = self.with_prior(self.graduated(&start_weight, relax));
-                        merit = stage.merit(&x.p, &lin);
-                        previous_tip_move = None;
-                    }
                 }
-                _ => {
+                None => {
                     mu = (mu * nu).max(T::lit(1e-6));
                     nu *= T::lit(2.0);
-                    if mu > T::lit(1e12) && !final_stage {
-                        // Stuck under the graduated prior: release it and go on.
-                        stage = *self;
-                        merit = stage.merit(&x.p, &lin);
-                        previous_tip_move = None;
-                        mu = T::lit(1e-12);
-                        nu = T::lit(2.0);
-                    } else if mu > T::lit(1e12) {
+                    if mu > T::lit(1e12) {
                         // No step improves the fit. If the last Gauss-Newton step is itself negligible,
                         // this is the rounding floor, not a failure.
-                        let termination = if stage.converged(&x, &lin, &red, None).0 {
+                        return if self.converged(x, lin, &red, None).0 {
                             Termination::Converged
                         } else {
                             Termination::Stalled
                         };
-                        return self.finish(x, &lin, termination, work);
                     }
                 }
             }
         }
-        let final_stage = stage.prior_weight == self.prior_weight;
-        let done = final_stage
-            && self
-                .reduce(&lin)
-                .is_some_and(|r| self.converged(&x, &lin, &r, previous_tip_move).0);
-        let termination = if done {
+        let done = self
+            .reduce(lin)
+            .is_some_and(|r| self.converged(x, lin, &r, previous_tip_move).0);
+        if done {
             Termination::Converged
         } else {
             Termination::IterationLimit
+        }
+    }
+
+    /// The data's misfit at a linearisation: `|c~|^2`, in squared standard deviations.
+    fn misfit(&self, lin: &Linearization<T, P>) -> Option<T> {
+        self.reduce(lin).map(|red| red.c.norm_squared())
+    }
+
+    /// The direction of the parameters the data determine worst: the smallest eigenvector of the
+    /// data's information `G^T G` (power iteration on its inverse). `None` when the data do not
+    /// determine every direction (the verdict already says so).
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn weakest_direction(&self, lin: &Linearization<T, P>) -> Option<SVector<T, P>> {
+        let red = self.reduce(lin)?;
+        let information = red.g.tr_mul(&red.g);
+        let cholesky = information.cholesky()?;
+        let mut v = SVector::<T, P>::repeat(T::one()).normalize();
+        for _ in 0..WEAKEST_ITERATIONS {
+            let next = cholesky.solve(&v);
+            let norm = next.norm();
+            if !(norm.is_finite() && norm > T::zero()) {
+                return None;
+            }
+            v = next / norm;
+        }
+        Some(v)
+    }
+
+    /// Leads to other answers that explain the measurements: a profile of the merit along the
+    /// direction `v` the data determine worst. The parameters' component along `v` is held at values
+    /// stepping away from the answer's on either side (from [`SCAN_FIRST`] of the answer's load or
+    /// one buckling scale `D`, growing by [`SCAN_GROWTH`], halving where a point is not reached), the
+    /// rest re-solved from the previous point; where the merit falls outward along the profile (its
+    /// slope along `v` turns) past a crest, another minimum lies further out, and the lowest point of
+    /// that descent is a lead for [`Problem::weigh`]. The profile reaches loads [`SCAN_FACTOR`] times
+    /// the answer's, or [`InverseSettings::scan_reach`] buckling scales, whichever is larger. On the
+    /// way it measures the posterior's width along `v` ([`Widen`]).
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn alternatives(
+        &self,
+        x: &Point<T, P>,
+        lin: &Linearization<T, P>,
+        limit: u16,
+        work: &mut Work,
+    ) -> Result<Leads<T, P>, OutOfBudget> {
+        let mut leads = Leads {
+            starts: [None, None],
+            widen: None,
         };
-        self.finish(x, &lin, termination, work)
+        let (Some(v), Some(best_misfit)) = (self.weakest_direction(lin), self.misfit(lin)) else {
+            return Ok(leads);
+        };
+        // One buckling scale along v, in parameter units.
+        let scale = T::one() / v.component_mul(&self.buckling_weight).norm();
+        if !(scale.is_finite() && scale > T::zero()) {
+            return Ok(leads);
+        }
+        let best_merit = self.merit(&x.p, lin);
+        // The posterior's width along v as the profile shows it (see `Widen`).
+        let mut width = T::zero();
+        let size = x.p.component_mul(&self.buckling_weight).norm();
+        let reach = (size * T::lit(SCAN_FACTOR)).max(self.settings.scan_reach) * scale;
+        let base = v.dot(&x.p);
+        for (side, start) in [T::one(), -T::one()]
+            .into_iter()
+            .zip(leads.starts.iter_mut())
+        {
+            let (mut here, mut here_lin) = (*x, *lin);
+            // Steps relative to the answer's own size: the profile's scale of change grows with it.
+            let (mut offset, mut step) =
+                (T::zero(), scale * (size * T::lit(SCAN_FIRST)).max(T::one()));
+            // The lowest point of a descent along the profile, past a crest, and its misfit.
+            let mut lowest: Option<(Point<T, P>, T)> = None;
+            let mut first = true;
+            // The highest misfit on the profile so far: another answer lies beyond a crest.
+            let mut crest = best_misfit;
+            while offset < reach && step >= scale * T::lit(0.25) {
+                if work.sweeps >= limit {
+                    return Err(OutOfBudget);
+                }
+                let next = (offset + step).min(reach);
+                let profile = Self {
+                    fix: Some(Fix {
+                        direction: v,
+                        value: base + side * next,
+                    }),
+                    max_moment_residual: self.max_moment_residual * T::lit(LOOSE_PROJECTION),
+                    ..*self
+                };
+                let Some(slope) = profile.profile_point(&mut here, &mut here_lin, limit, work)
+                else {
+                    step *= T::lit(0.5);
+                    continue;
+                };
+                offset = next;
+                step *= T::lit(SCAN_GROWTH);
+                let misfit = self.misfit(&here_lin).unwrap_or(best_misfit);
+                // The profile's rise over the answer: within one unit the load is inside the
+                // posterior's one-standard-deviation interval; at the first point, the rise gives the
+                // width a quadratic through it would have.
+                let rise = self.merit(&here.p, &here_lin) - best_merit;
+                if rise <= T::one() {
+                    width = width.max(next);
+                }
+                if first && rise > T::zero() {
+                    width = width.max(next / rise.sqrt());
+                }
+                first = false;
+                crest = crest.max(misfit);
+                if crest <= best_misfit + T::lit(ALTERNATIVE_CHI2) {
+                    // Still in the answer's own valley (never three standard deviations above it):
+                    // a flat valley, not another answer; the posterior reaches at least this far
+                    // within three standard deviations.
+                    width = width.max(next / T::lit(3.0));
+                    continue;
+                }
+                // Past a crest the merit falls outward: follow the profile down to its next valley
+                // (where the slope turns again, or the data are explained); the lowest point seen
+                // since the crest is the lead.
+                let descending = side * slope < T::zero();
+                if descending || lowest.is_some() {
+                    if lowest.is_none_or(|(_, m)| misfit < m) {
+                        lowest = Some((here, misfit));
+                    }
+                    if descending && misfit > best_misfit + T::lit(ALTERNATIVE_CHI2) {
+                        continue;
+                    }
+                    break;
+                }
+            }
+            // A descent cut short by the reach or a point not reached is a lead where it got to.
+            *start = lowest.map(|(point, _)| point);
+        }
+        leads.widen = (width > T::zero()).then_some(Widen {
+            direction: v,
+            std: width,
+        });
+        Ok(leads)
+    }
+
+    /// Follows the leads of [`Problem::alternatives`]: an unconstrained solve from each (at most
+    /// [`SETTLE_SWEEPS`] sweeps), kept when it reaches a point more than half a buckling scale from
+    /// the answer `x`; the best of those, if it scores better but has not converged, is finished with
+    /// what the budget has left. A converged better answer replaces `x` and `lin`.
+    // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
+    #[inline(never)]
+    fn weigh(
+        &self,
+        x: &mut Point<T, P>,
+        lin: &mut Linearization<T, P>,
+        starts: &[Option<Point<T, P>>; 2],
+        limit: u16,
+        work: &mut Work,
+    ) -> Scan {
+        let Some(best_misfit) = self.misfit(lin) else {
+            return Scan::Unique;
+        };
+        let best_merit = self.merit(&x.p, lin);
+        // The best point reached, its merit, and whether its solve converged.
+        let mut found: Option<(Point<T, P>, T, bool)> = None;
+        for start in starts.iter().flatten() {
+            if work.sweeps >= limit {
+                return Scan::Incomplete;
+            }
+            // A lead is on the equilibrium at its own load: one sweep linearises it.
+            let mut reached = *start;
+            let Some(mut reached_lin) = self.linearize_at(&reached, work) else {
+                continue;
+            };
+            let budget = limit.min(work.sweeps.saturating_add(SETTLE_SWEEPS));
+            let termination = self.refine(&mut reached, &mut reached_lin, budget, work);
+            let apart = (reached.p - x.p)
+                .component_mul(&self.buckling_weight)
+                .norm()
+                > T::lit(0.5);
+            // Where the budget ran out or the solve stalled first, the point reached may still
+            // explain the data (its misfit is judged below); only a converged one may replace the
+            // answer.
+            let merit = self.merit(&reached.p, &reached_lin);
+            if apart && found.is_none_or(|(_, m, _)| m > merit) {
+                found = Some((reached, merit, termination.is_success()));
+            }
+        }
+        let Some((mut alt, alt_merit, mut converged)) = found else {
+            return Scan::Unique;
+        };
+        // The point's linearisation again (one sweep: the same point gives the same sweep).
+        let Some(mut alt_lin) = self.linearize_at(&alt, work) else {
+            return Scan::Incomplete;
+        };
+        if !converged && alt_merit < best_merit {
+            // A better answer not yet converged: finish it with what the budget has left.
+            converged = self
+                .refine(&mut alt, &mut alt_lin, limit, work)
+                .is_success();
+        }
+        let alt_misfit = self.misfit(&alt_lin).unwrap_or(best_misfit);
+        if converged && self.merit(&alt.p, &alt_lin) < best_merit {
+            // The other answer is the better one: it is returned, and ambiguous if this one fits as
+            // well.
+            let this_fits = best_misfit <= alt_misfit + T::lit(ALTERNATIVE_CHI2);
+            (*x, *lin) = (alt, alt_lin);
+            Scan::Better(this_fits)
+        } else if alt_misfit <= best_misfit + T::lit(ALTERNATIVE_CHI2) {
+            Scan::Ambiguous
+        } else {
+            Scan::Unique
+        }
+    }
+
+    /// One point of a profile from the previous one: a constrained Gauss-Newton step onto it, then
+    /// up to [`SCAN_ITERATIONS`] damped ones along it. Moves `here` to the new point and returns the
+    /// merit's slope along the profile's direction there; `None` when the point is not reached
+    /// (`here` may have moved toward it).
+    fn profile_point(
+        &self,
+        here: &mut Point<T, P>,
+        here_lin: &mut Linearization<T, P>,
+        limit: u16,
+        work: &mut Work,
+    ) -> Option<T> {
+        let fix = self.fix?;
+        let red = self.reduce(here_lin)?;
+        let step = self.step(&red, &here.p, T::lit(1e-12))?;
+        let anywhere = T::max_value().unwrap_or_else(T::one);
+        self.try_step(here, here_lin, step, anywhere, work)?;
+        // The trust region may have shortened the step: on the way, but not on the constraint.
+        if (fix.direction.dot(&here.p) - fix.value).abs()
+            > T::lit(1e-3) / self.buckling_weight.max().max(T::default_epsilon())
+        {
+            return None;
+        }
+        self.damped_steps(here, here_lin, SCAN_ITERATIONS, limit, work)
+            .ok()?;
+        let red = self.reduce(here_lin)?;
+        Some(fix.direction.dot(&self.gradient(&red, &here.p)))
     }
 
     pub(super) fn finish(
@@ -562,8 +1015,21 @@ where
         termination: Termination,
         work: Work,
     ) -> Estimate<T, P> {
+        self.finish_widened(x, lin, termination, work, None)
+    }
+
+    /// [`Problem::finish`], with the posterior widened along a direction where the profile showed
+    /// it wider than the linearisation does.
+    fn finish_widened(
+        &self,
+        x: Point<T, P>,
+        lin: &Linearization<T, P>,
+        termination: Termination,
+        work: Work,
+        widen: Option<&Widen<T, P>>,
+    ) -> Estimate<T, P> {
         let red = self.reduce(lin);
-        let quality = self.quality(lin, red.as_ref());
+        let quality = self.quality(lin, red.as_ref(), widen);
         let mut termination = termination;
         if termination.is_success()
             && !(lin.frame_drift.is_finite() && lin.frame_drift <= T::lit(MAX_FRAME_DRIFT))

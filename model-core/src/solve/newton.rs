@@ -60,10 +60,41 @@ pub(crate) struct Newton<T, const K: usize> {
 pub(crate) fn newton<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: SVector<T, K>,
-    first: Option<Sweep<T, K>>,
+    first: Option<&Sweep<T, K>>,
     options: &NewtonOptions<T>,
     work: &mut Work,
 ) -> Newton<T, K>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    let mut x = start;
+    let mut sw = match first {
+        Some(sw) => *sw,
+        None => {
+            work.sweep();
+            sweep(ode, &x, options.tangents, None)
+        }
+    };
+    let (residual, termination) = newton_in_place(ode, &mut x, &mut sw, options, work);
+    Newton {
+        x,
+        sweep: sw,
+        residual,
+        termination,
+    }
+}
+
+/// [`newton`] in place: from `x`, whose sweep `sw` is, to where the solve stops, `sw` following.
+/// Returns the residual's size there and why it stopped. Out of line: the caller's sweep is not
+/// copied into its frame.
+#[inline(never)]
+pub(crate) fn newton_in_place<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    x: &mut SVector<T, K>,
+    sw: &mut Sweep<T, K>,
+    options: &NewtonOptions<T>,
+    work: &mut Work,
+) -> (T, Termination)
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
@@ -71,18 +102,8 @@ where
         work.sweep();
         sweep(ode, x, options.tangents, None)
     };
-    let mut x = start;
-    let mut sw = match first {
-        Some(sw) => sw,
-        None => run(&x, work),
-    };
     if !sw.finite {
-        return Newton {
-            x,
-            sweep: sw,
-            residual: T::zero(),
-            termination: Termination::NonFinite,
-        };
+        return (T::zero(), Termination::NonFinite);
     }
     let length = ode.length_m();
     let tolerance = options.tolerance;
@@ -99,13 +120,8 @@ where
     let mut mu = T::zero();
     let mut rejections = 0u8;
     for _ in 0..options.max_iterations {
-        if converged(&sw, &x) {
-            return Newton {
-                x,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
+        if converged(sw, x) {
+            return (residual, Termination::Converged);
         }
         let jacobian = sw.jacobian();
         let step: Option<SVector<T, K>> = if mu == T::zero() {
@@ -123,12 +139,7 @@ where
                 mu = T::lit(1e-3);
                 continue;
             }
-            return Newton {
-                x,
-                sweep: sw,
-                residual,
-                termination: Termination::Singular,
-            };
+            return (residual, Termination::Singular);
         };
         // At the rounding floor the residual stops decreasing. A Newton correction that turns the base
         // and moves the tip by less than the tolerance may mean the answer is as good as the scalar
@@ -146,19 +157,14 @@ where
                 tolerance,
             );
         if at_floor && stopping::tip_move_negligible(tip_move, length, tolerance) {
-            return Newton {
-                x,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
+            return (residual, Termination::Converged);
         }
         let norm = step.norm();
         if norm > max_step {
             step *= max_step / norm;
         }
         work.iterations = work.iterations.saturating_add(1);
-        let trial_x = x + step;
+        let trial_x = *x + step;
         let trial = run(&trial_x, work);
         let trial_residual = if trial.finite {
             ode.residual_size(&trial.residual)
@@ -166,19 +172,14 @@ where
             residual
         };
         if trial.finite && trial_residual < residual {
-            (x, sw, residual) = (trial_x, trial, trial_residual);
+            (*x, *sw, residual) = (trial_x, trial, trial_residual);
             mu *= T::lit(0.25);
             if mu < T::lit(1e-6) {
                 mu = T::zero();
             }
             rejections = 0;
         } else if at_floor {
-            return Newton {
-                x,
-                sweep: sw,
-                residual,
-                termination: Termination::Converged,
-            };
+            return (residual, Termination::Converged);
         } else {
             mu = if mu == T::zero() {
                 T::lit(1e-3)
@@ -187,29 +188,19 @@ where
             };
             rejections += 1;
             if rejections >= MAX_REJECTIONS {
-                let termination = if converged(&sw, &x) {
+                let termination = if converged(sw, x) {
                     Termination::Converged
                 } else {
                     Termination::Stalled
                 };
-                return Newton {
-                    x,
-                    sweep: sw,
-                    residual,
-                    termination,
-                };
+                return (residual, termination);
             }
         }
     }
-    let termination = if converged(&sw, &x) {
+    let termination = if converged(sw, x) {
         Termination::Converged
     } else {
         Termination::IterationLimit
     };
-    Newton {
-        x,
-        sweep: sw,
-        residual,
-        termination,
-    }
+    (residual, termination)
 }

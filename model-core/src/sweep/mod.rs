@@ -129,14 +129,6 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
         (slot < self.tangents).then_some(slot)
     }
 
-    /// Tangent `j` of `family`'s change of the residual (zero when not carried).
-    pub fn d_residual(&self, family: Family, j: usize) -> SVector<T, K> {
-        self.slot(family, j)
-            .and_then(|j| self.d_residual.get(j))
-            .copied()
-            .unwrap_or_else(SVector::zeros)
-    }
-
     /// Tangent `j` of `family`'s change of the tip rotation, body frame (zero when not carried).
     pub fn d_rotation(&self, family: Family, j: usize) -> Vector3<T> {
         self.slot(family, j)
@@ -153,17 +145,52 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
             .unwrap_or_else(Vector3::zeros)
     }
 
-    /// Tangent `j` of `family`'s change of cable `c`'s length (zero when not carried).
-    pub fn d_cable_length(&self, c: usize, family: Family, j: usize) -> T {
-        self.slot(family, j)
-            .and_then(|j| self.d_cable.get(c).and_then(|row| row.get(j)))
-            .copied()
-            .unwrap_or_else(T::zero)
+    /// The first `N` tangents of `family` as the columns of a matrix: `column(slot)` for each slot
+    /// the sweep carried, zero for the others.
+    fn block<const R: usize, const N: usize>(
+        &self,
+        family: Family,
+        column: impl Fn(usize) -> Option<SVector<T, R>>,
+    ) -> SMatrix<T, R, N> {
+        let mut out = SMatrix::<T, R, N>::zeros();
+        for (j, mut col) in out.column_iter_mut().enumerate() {
+            if let Some(c) = self.slot(family, j).and_then(&column) {
+                col.copy_from(&c);
+            }
+        }
+        out
+    }
+
+    /// The changes of the cable lengths along the first `N` tangents of `family`, one column each
+    /// (zero where not carried, and beyond the rod's cables).
+    pub fn cable_block<const N: usize>(&self, family: Family) -> SMatrix<T, MAX_CABLES, N> {
+        self.block(family, |slot| {
+            let mut col = SVector::<T, MAX_CABLES>::zeros();
+            for (out, row) in col.iter_mut().zip(&self.d_cable) {
+                *out = row.get(slot).copied().unwrap_or_else(T::zero);
+            }
+            Some(col)
+        })
+    }
+
+    /// `d tip position` along the first `N` tangents of `family`.
+    pub fn position_block<const N: usize>(&self, family: Family) -> SMatrix<T, 3, N> {
+        self.block(family, |slot| self.d_tip_position.get(slot).copied())
+    }
+
+    /// `d tip rotation` (body frame) along the first `N` tangents of `family`.
+    pub fn rotation_block<const N: usize>(&self, family: Family) -> SMatrix<T, 3, N> {
+        self.block(family, |slot| self.d_tip_rotation.get(slot).copied())
+    }
+
+    /// `d residual` along the first `N` tangents of `family`.
+    pub fn residual_block<const N: usize>(&self, family: Family) -> SMatrix<T, K, N> {
+        self.block(family, |slot| self.d_residual.get(slot).copied())
     }
 
     /// The shooting Jacobian `d residual / d unknowns`.
     pub fn jacobian(&self) -> SMatrix<T, K, K> {
-        crate::scalar::from_columns(|j| self.d_residual(Family::Unknown, j))
+        self.residual_block(Family::Unknown)
     }
 
     /// The tip move a change `dx` of the unknowns predicts, m.
