@@ -1,21 +1,48 @@
 //! `host-sim`: run the thesis's experiments and your own scenes through the model in f64.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use host_sim::run::{self, Estimate, Solve, with_model};
+use host_sim::run::{self, Estimate, Solve, Status, exit, with_model};
 use host_sim::scene::{Scene, SceneError};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
 
 mod study;
 
+/// The exit codes and the status in every format (`--help`; the README repeats it).
+const EXIT_STATUS: &str = "\
+Exit status of solve and estimate:
+  0  a converged answer (stable, where stability is checked). For estimate, whatever the
+     determination (Determined, Weak, Undetermined, ...): the uncertainty says how good it is.
+  1  invalid input: a bad scene file or value (a negative cable length, too many guides, ...),
+     or an I/O error
+  2  command-line usage error
+  3  no answer: the solve did not converge, converged to an unstable equilibrium, or its frame
+     drifted (any termination other than Converged). The failed iterate is not printed.
+  4  estimate only: converged, but no load of the model explains the measurements
+     (Inconsistent). The closest fit is printed.
+validate and study exit 1 when a check fails.
+
+Every format says its status. Text: the first line. JSON: a top-level \"status\" object
+(verdict, exit_code, termination, stability, stability_checked, for estimate determination,
+summary, warnings); without an answer the shape, tip, cable lengths and forces are null. A
+non-finite JSON number (a NaN residual) is written as the string \"NaN\", \"Infinity\" or
+\"-Infinity\", never as null. CSV: a last column \"status\" on every row,
+termination/stability[/determination] (for example Converged/Stable/Weak); without an answer the
+only row has empty numbers and the status. Stability \"Unchecked\" (the scene sets
+check_stability = false) or \"NonConservative\" (a moment acts) means the stability test did not
+run: an unstable, wrong-branch equilibrium would be reported as converged; a warning goes to
+standard error.";
+
 #[derive(Parser)]
 #[command(
     version,
-    about = "Cosserat-rod shape model of a cable-driven continuum robot, in f64 on the host"
+    about = "Cosserat-rod shape model of a cable-driven continuum robot, in f64 on the host",
+    after_help = EXIT_STATUS
 )]
 struct Cli {
     #[command(subcommand)]
@@ -28,7 +55,7 @@ enum Format {
     Text,
     /// JSON (everything).
     Json,
-    /// CSV of the backbone points.
+    /// CSV of the backbone points, with a status column.
     Csv,
 }
 
@@ -55,6 +82,8 @@ enum Command {
         fit_density: bool,
     },
     /// Solve a scene: the shape and the cable lengths under its tip load.
+    /// Exits 3 when the solve gives no answer (see below).
+    #[command(after_help = EXIT_STATUS)]
     Solve {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -72,11 +101,19 @@ enum Command {
         out: Option<PathBuf>,
     },
     /// Estimate the tip force of a scene's robot from measured cable lengths.
+    /// Exits 3 when the solve gives no answer, 4 when no load explains the lengths (see below).
+    #[command(after_help = EXIT_STATUS)]
     Estimate {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Measured cable lengths, m, one per cable: L1,L2,L3.
-        #[arg(long, value_delimiter = ',', required = true)]
+        /// Measured cable lengths, m, one per cable: L1,L2,L3. A value may start with a minus sign
+        /// (it is then refused as a length, with exit 1, not taken for an option).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            required = true,
+            allow_hyphen_values = true
+        )]
         cables: Vec<f64>,
         /// Output format.
         #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -107,17 +144,18 @@ fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
 
 fn fail(e: &dyn std::fmt::Display) -> ExitCode {
     eprintln!("error: {e}");
-    ExitCode::FAILURE
+    ExitCode::from(exit::INVALID_INPUT)
 }
 
 fn emit(text: &str, out: Option<&PathBuf>) -> Result<(), SceneError> {
     match out {
         Some(path) => std::fs::write(path, text)
             .map_err(|e| SceneError::new(path.display().to_string(), format!("cannot write: {e}"))),
-        None => {
-            print!("{text}");
-            Ok(())
-        }
+        // Not `print!`, which panics when the reader has gone (a closed pipe).
+        None => std::io::stdout()
+            .lock()
+            .write_all(text.as_bytes())
+            .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}"))),
     }
 }
 
@@ -127,8 +165,28 @@ fn json<T: serde::Serialize>(value: &T) -> Result<String, SceneError> {
         .map_err(|e| SceneError::new("output", e.to_string()))
 }
 
+/// The status line and the warnings, first in the text format.
+fn status_text(t: &mut String, status: &Status) {
+    let _ = writeln!(t, "{}", status.line());
+    for w in &status.warnings {
+        let _ = writeln!(t, "warning: {w}");
+    }
+}
+
+/// Standard error gets the warnings and, when there is no answer, why: whatever the format, and
+/// also when the output goes to a file.
+fn status_stderr(status: &Status) {
+    for w in &status.warnings {
+        eprintln!("warning: {w}");
+    }
+    if status.exit_code != exit::ANSWER {
+        eprintln!("error: {} (exit {})", status.summary, status.exit_code);
+    }
+}
+
 fn solve_text(s: &run::Solution) -> String {
     let mut t = String::new();
+    status_text(&mut t, &s.status);
     let _ = writeln!(t, "scene: {}", s.scene);
     let _ = writeln!(
         t,
@@ -136,36 +194,59 @@ fn solve_text(s: &run::Solution) -> String {
         s.tip_force_n, s.tip_moment_nm
     );
     let _ = writeln!(t, "solve: {:?}", s.report);
-    let _ = writeln!(
-        t,
-        "tip position {:?} m, tangent {:?}",
-        s.tip_position_m, s.tip_tangent
-    );
-    let _ = writeln!(t, "cable lengths {:?} m", s.cable_lengths_m);
-    t.push_str(&run::shape_csv(&s.shape));
+    match (
+        &s.tip_position_m,
+        &s.tip_tangent,
+        &s.cable_lengths_m,
+        &s.shape,
+    ) {
+        (Some(tip), Some(tangent), Some(cables), Some(shape)) => {
+            let _ = writeln!(t, "tip position {tip:?} m, tangent {tangent:?}");
+            let _ = writeln!(t, "cable lengths {cables:?} m");
+            t.push_str(&run::shape_csv(Some(shape), &s.status));
+        }
+        _ => {
+            let _ = writeln!(
+                t,
+                "no answer: no tip position, cable lengths or shape (the failed iterate is not printed)"
+            );
+        }
+    }
     t
 }
 
 fn estimate_text(e: &run::EstimateOutput) -> String {
     let mut t = String::new();
+    status_text(&mut t, &e.status);
     let _ = writeln!(t, "scene: {}", e.scene);
     let _ = writeln!(t, "measured cable lengths {:?} m", e.measured_m);
     let _ = writeln!(t, "solve: {:?}", e.report);
-    let _ = writeln!(t, "tip force {:?} N", e.tip_force_n);
-    let _ = writeln!(t, "  1 sd     {:?} N", e.tip_force_std_n);
-    let _ = writeln!(t, "tip position {:?} m", e.tip_position_m);
-    let _ = writeln!(t, "  1 sd        {:?} m", e.tip_position_std_m);
+    let Some(n) = &e.numbers else {
+        let _ = writeln!(
+            t,
+            "no answer: no tip force, tip position or shape (the failed iterate is not printed)"
+        );
+        return t;
+    };
+    let _ = writeln!(t, "tip force {:?} N", n.tip_force_n);
+    let _ = writeln!(t, "  1 sd     {:?} N", n.tip_force_std_n);
+    let _ = writeln!(t, "tip position {:?} m", n.tip_position_m);
+    let _ = writeln!(t, "  1 sd        {:?} m", n.tip_position_std_m);
     let _ = writeln!(
         t,
         "cable residual (model - measured) {:?} m",
-        e.cable_residual_m
+        n.cable_residual_m
     );
+    let determination = match &e.status.determination {
+        Some(Some(d)) => d.as_str(),
+        _ => "none",
+    };
     let _ = writeln!(
         t,
-        "determination: {}; condition number {:.3e}; singular values {:?}; weakest direction {:?}",
-        e.determination, e.condition_number, e.singular_values, e.weakest_direction
+        "determination: {determination}; condition number {:.3e}; singular values {:?}; weakest direction {:?}",
+        n.condition_number, n.singular_values, n.weakest_direction
     );
-    t.push_str(&run::shape_csv(&e.shape));
+    t.push_str(&run::shape_csv(Some(&n.shape), &e.status));
     t
 }
 
@@ -197,7 +278,7 @@ fn main() -> ExitCode {
                     report::inverse(name, &thesis::inverse_table(accurate)?)
                 );
             }
-            Ok(())
+            Ok(exit::ANSWER)
         })(),
         Command::Calibrate { table, fit_density } => (|| {
             let dataset = match table.as_str() {
@@ -216,7 +297,7 @@ fn main() -> ExitCode {
             let result = calibrate::calibrate(dataset, fit_density, || bar.inc(1));
             bar.finish_and_clear();
             print!("{}", report::calibration(&result?));
-            Ok(())
+            Ok(exit::ANSWER)
         })(),
         Command::Solve {
             scene,
@@ -240,12 +321,14 @@ fn main() -> ExitCode {
                     load,
                 },
             )?;
+            status_stderr(&solution.status);
             let text = match format {
                 Format::Text => solve_text(&solution),
                 Format::Json => json(&solution)?,
-                Format::Csv => run::shape_csv(&solution.shape),
+                Format::Csv => run::shape_csv(solution.shape.as_deref(), &solution.status),
             };
-            emit(&text, out.as_ref())
+            emit(&text, out.as_ref())?;
+            Ok(solution.status.exit_code)
         })(),
         Command::Estimate {
             scene,
@@ -261,16 +344,19 @@ fn main() -> ExitCode {
                     measured_m: cables,
                 },
             )?;
+            status_stderr(&estimate.status);
+            let shape = estimate.numbers.as_ref().map(|n| n.shape.as_slice());
             let text = match format {
                 Format::Text => estimate_text(&estimate),
                 Format::Json => json(&estimate)?,
-                Format::Csv => run::shape_csv(&estimate.shape),
+                Format::Csv => run::shape_csv(shape, &estimate.status),
             };
-            emit(&text, out.as_ref())
+            emit(&text, out.as_ref())?;
+            Ok(estimate.status.exit_code)
         })(),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(e) => fail(&e),
     }
 }

@@ -1,9 +1,22 @@
 //! `solve` and `estimate` on a scene: the forward shape and cable lengths, and the inverse from
-//! measured cable lengths. Results are plain data (serialisable to JSON and CSV).
+//! measured cable lengths. Results are plain data (serialisable to JSON and CSV), each with a
+//! [`Status`] that says whether it is an answer, and the exit code that goes with it.
+//!
+//! A failed solve's iterate is not an answer: its shape, tip, cable lengths and forces are left out
+//! (`None`, JSON `null`, no CSV data rows), so a script that reads the numbers cannot take it for one.
+//!
+//! JSON has no NaN or infinity, and serde_json writes them as `null`, which reads as "no value": every
+//! number here is written through [`real`], which writes a non-finite one as the string `"NaN"`,
+//! `"Infinity"` or `"-Infinity"`. (A solve that ended in `NonFinite` has a NaN residual.)
 
-use model_core::inverse::{EstimatorSettings, InverseSettings, InverseStart, LoadBasis, estimate};
+use std::fmt::Write as _;
+
+use model_core::inverse::{
+    Determination, EstimatorSettings, InverseSettings, InverseStart, LoadBasis, estimate,
+};
 use model_core::{
-    Attitude, LieGroup, Model, Quaternion, RotationMatrix, ShapePoint, Start, TipLoad,
+    Attitude, LieGroup, Model, Quaternion, RotationMatrix, ShapePoint, SolveReport, Stability,
+    Start, Termination, TipLoad,
 };
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -33,20 +46,272 @@ pub fn with_model<W: WithModel>(scene: &Scene, work: W) -> Result<W::Output, Sce
     }
 }
 
+/// Exit codes of `solve` and `estimate` (documented in `--help` and the README).
+pub mod exit {
+    /// A converged answer (stable, where stability is checked).
+    pub const ANSWER: u8 = 0;
+    /// Invalid input: a bad scene file, a refused value, an I/O error.
+    pub const INVALID_INPUT: u8 = 1;
+    /// A command-line usage error (clap's own code).
+    pub const USAGE: u8 = 2;
+    /// No answer: the solve did not converge, converged to an unstable equilibrium, or its frame
+    /// drifted (any termination other than `Converged`).
+    pub const NO_ANSWER: u8 = 3;
+    /// `estimate` only: converged, but no load of the model explains the measurements.
+    pub const INCONSISTENT: u8 = 4;
+}
+
+/// What an output is, in one word; it decides the exit code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Converged, and stable where stability was checked: exit 0. Its uncertainty (for `estimate`,
+    /// the determination) says how good it is.
+    Answer,
+    /// Not converged, unstable, or the frame drifted: exit 3. The numbers of the failed iterate are
+    /// left out.
+    NoAnswer,
+    /// `estimate`: converged, but no load explains the measurements (`Inconsistent`): exit 4. The
+    /// numbers are the closest fit, printed so that the residual shows which cable disagrees.
+    Inconsistent,
+}
+
+impl Verdict {
+    /// The process exit code for this verdict.
+    pub fn exit_code(self) -> u8 {
+        match self {
+            Self::Answer => exit::ANSWER,
+            Self::NoAnswer => exit::NO_ANSWER,
+            Self::Inconsistent => exit::INCONSISTENT,
+        }
+    }
+
+    /// Whether the numbers are printed (the answer, or an inconsistent estimate's closest fit).
+    pub fn has_numbers(self) -> bool {
+        self != Self::NoAnswer
+    }
+}
+
+/// What the stability test gives up when it did not run.
+const UNCHECKED_STABILITY: &str = "an unstable equilibrium (a wrong branch: buckled, upside \
+     down, looped) would be reported as converged";
+
+/// The status of a `solve` or `estimate` output: first in every format (the text's first line, the
+/// JSON's `status` object, the CSV's `status` column).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Status {
+    /// What the output is.
+    pub verdict: Verdict,
+    /// The exit code that goes with it.
+    pub exit_code: u8,
+    /// Why the solve stopped (`Converged` is the only usable answer).
+    pub termination: String,
+    /// The stability verdict (`Unchecked` when the test did not run).
+    pub stability: String,
+    /// Whether the energy test of stability ran and gave a verdict. False when the scene turned it
+    /// off (`check_stability = false`), when a moment of fixed direction acts (`NonConservative`: the
+    /// test does not apply), or when the solve did not converge.
+    pub stability_checked: bool,
+    /// `estimate` only (absent for `solve`): how well the data determine the load, as model-core
+    /// names it (`Determined`, `Weak`, `Undetermined`, `Inconsistent`, ...); `null` when there is no
+    /// answer to judge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub determination: Option<Option<String>>,
+    /// One sentence: what the output is and why.
+    pub summary: String,
+    /// What the answer gives up (stability not checked), also printed to standard error.
+    pub warnings: Vec<String>,
+}
+
+impl Status {
+    /// The status of a solve that stopped with `report`; `check_stability` is the scene's setting;
+    /// `determination` is the estimate's verdict (`None` for `solve`).
+    pub fn new(
+        report: &SolveReport<f64>,
+        check_stability: bool,
+        determination: Option<Determination>,
+    ) -> Self {
+        let converged = report.termination.is_success();
+        // Model-core turns an unstable answer into `Termination::Unstable`; the stability is looked
+        // at again so that no unstable equilibrium is ever an answer here.
+        let stable = report.stability.is_acceptable();
+        // The test ran and gave a verdict (an `Unstable` termination's verdict included).
+        let stability_checked = matches!(
+            report.stability,
+            Stability::Stable | Stability::ConjugatePoint(_) | Stability::FreeEndUnstable
+        );
+        let inconsistent = determination == Some(Determination::Inconsistent);
+        let verdict = if !(converged && stable) {
+            Verdict::NoAnswer
+        } else if inconsistent {
+            Verdict::Inconsistent
+        } else {
+            Verdict::Answer
+        };
+        let mut warnings = Vec::new();
+        if !check_stability {
+            warnings.push(format!(
+                "stability not checked (the scene sets [solver] check_stability = false): \
+                 {UNCHECKED_STABILITY}"
+            ));
+        } else if converged && matches!(report.stability, Stability::NonConservative) {
+            warnings.push(format!(
+                "stability not checked (a moment of fixed direction acts: the loads are not \
+                 conservative and the energy test does not apply): {UNCHECKED_STABILITY}"
+            ));
+        }
+        let summary = match verdict {
+            Verdict::NoAnswer => format!("no answer: {}", failure(report)),
+            Verdict::Inconsistent => "converged, but no load of the model explains the \
+                 measurements (within 3 standard deviations); the numbers are the closest fit"
+                .to_string(),
+            Verdict::Answer => {
+                let mut t = String::from("converged");
+                t.push_str(if stability_checked {
+                    ", stable"
+                } else {
+                    ", stability NOT checked"
+                });
+                if let Some(d) = determination {
+                    let _ = write!(t, "; determination {d:?}");
+                }
+                t
+            }
+        };
+        Self {
+            verdict,
+            exit_code: verdict.exit_code(),
+            termination: format!("{:?}", report.termination),
+            stability: format!("{:?}", report.stability),
+            stability_checked,
+            // Determination is printed with `{:?}` and never matched exhaustively: model-core may add
+            // verdicts (`Ambiguous`), which then show here as they are.
+            determination: determination.map(|d| verdict.has_numbers().then(|| format!("{d:?}"))),
+            summary,
+            warnings,
+        }
+    }
+
+    /// The text format's first line.
+    pub fn line(&self) -> String {
+        let mut t = format!("status: {}", self.summary);
+        let _ = write!(
+            t,
+            " (termination {}, stability {}",
+            self.termination, self.stability
+        );
+        if let Some(Some(d)) = &self.determination {
+            let _ = write!(t, ", determination {d}");
+        }
+        let _ = write!(t, "; exit {})", self.exit_code);
+        t
+    }
+
+    /// The CSV's `status` cell: `termination/stability`, and `/determination` for an estimate.
+    pub fn csv_cell(&self) -> String {
+        let mut cell = format!("{}/{}", self.termination, self.stability);
+        if let Some(Some(d)) = &self.determination {
+            let _ = write!(cell, "/{d}");
+        }
+        cell
+    }
+}
+
+/// Why a solve is not an answer, in words.
+fn failure(report: &SolveReport<f64>) -> String {
+    let t = report.termination;
+    // Not exhaustive on purpose: a termination model-core adds later is still reported (by name).
+    let why = match t {
+        Termination::Converged => {
+            return format!(
+                "converged to an unstable equilibrium ({:?}): a wrong branch",
+                report.stability
+            );
+        }
+        Termination::Unstable => {
+            "the solve converged to an unstable equilibrium (a wrong branch)".to_string()
+        }
+        Termination::FrameDrift => "the solve converged, but its frame drifted from a rotation \
+             (too few steps for the frame representation; use more steps or the quaternion frame)"
+            .to_string(),
+        other => format!("the solve did not converge ({other:?})"),
+    };
+    format!("{why}; the failed iterate's shape and numbers are not printed")
+}
+
+/// JSON numbers: a finite `f64` as a number, a non-finite one as the string `"NaN"`, `"Infinity"` or
+/// `"-Infinity"` (JSON has none of them, and serde_json would write `null`). For `serialize_with`.
+pub mod real {
+    use serde::Serializer;
+    use serde::ser::Serialize;
+
+    /// One number.
+    #[derive(Debug, Clone, Copy)]
+    struct Real(f64);
+
+    impl Serialize for Real {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            let x = self.0;
+            if x.is_finite() {
+                s.serialize_f64(x)
+            } else if x.is_nan() {
+                s.serialize_str("NaN")
+            } else if x > 0.0 {
+                s.serialize_str("Infinity")
+            } else {
+                s.serialize_str("-Infinity")
+            }
+        }
+    }
+
+    /// An `f64`.
+    pub fn one<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        Real(*x).serialize(s)
+    }
+
+    /// An array or vector of `f64`.
+    pub fn many<S: Serializer, V: AsRef<[f64]>>(v: &V, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.as_ref().iter().map(|x| Real(*x)))
+    }
+
+    /// An optional array or vector of `f64` (`null` when absent).
+    pub fn opt_many<S: Serializer, V: AsRef<[f64]>>(
+        v: &Option<V>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => many(v, s),
+            None => s.serialize_none(),
+        }
+    }
+
+    /// An optional `f64` (`null` when absent).
+    pub fn opt_one<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match x {
+            Some(x) => one(x, s),
+            None => s.serialize_none(),
+        }
+    }
+}
+
 /// One backbone point.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Point {
     /// Arc length, m.
+    #[serde(serialize_with = "real::one")]
     pub s_m: f64,
     /// Position, m.
+    #[serde(serialize_with = "real::many")]
     pub position_m: [f64; 3],
     /// Unit tangent.
+    #[serde(serialize_with = "real::many")]
     pub tangent: [f64; 3],
     /// Bending and torsion strain (body frame), 1/m.
+    #[serde(serialize_with = "real::many")]
     pub strain_per_m: [f64; 3],
 }
 
-/// How a solve went.
+/// How a solve went (diagnostics, also for a failed solve: how far it got).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Report {
     /// Why it stopped ("Converged" is the only usable answer).
@@ -57,7 +322,8 @@ pub struct Report {
     pub iterations: u16,
     /// Sweeps.
     pub sweeps: u16,
-    /// Final dimensionless residual.
+    /// Final dimensionless residual (NaN after a `NonFinite` sweep: see [`real`]).
+    #[serde(serialize_with = "real::one")]
     pub residual: f64,
     /// Load-continuation steps.
     pub load_steps: u16,
@@ -76,25 +342,32 @@ impl From<&model_core::SolveReport<f64>> for Report {
     }
 }
 
-/// The result of `solve`.
+/// The result of `solve`. The answer's numbers are `None` unless `status.verdict` has them.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Solution {
+    /// Whether this is an answer, and why not.
+    pub status: Status,
     /// Scene name.
     pub scene: String,
-    /// Tip force, N.
+    /// Tip force, N (the input).
+    #[serde(serialize_with = "real::many")]
     pub tip_force_n: [f64; 3],
-    /// Tip moment, N m.
+    /// Tip moment, N m (the input).
+    #[serde(serialize_with = "real::many")]
     pub tip_moment_nm: [f64; 3],
     /// Solve report.
     pub report: Report,
     /// Tip position, m.
-    pub tip_position_m: [f64; 3],
+    #[serde(serialize_with = "real::opt_many")]
+    pub tip_position_m: Option<[f64; 3]>,
     /// Tip tangent.
-    pub tip_tangent: [f64; 3],
+    #[serde(serialize_with = "real::opt_many")]
+    pub tip_tangent: Option<[f64; 3]>,
     /// Cable lengths, m.
-    pub cable_lengths_m: Vec<f64>,
+    #[serde(serialize_with = "real::opt_many")]
+    pub cable_lengths_m: Option<Vec<f64>>,
     /// Backbone at the output points.
-    pub shape: Vec<Point>,
+    pub shape: Option<Vec<Point>>,
 }
 
 fn arr(v: &Vector3<f64>) -> [f64; 3] {
@@ -126,55 +399,113 @@ impl WithModel for Solve<'_> {
         let eq = model
             .solve(&self.load, Start::Cold, &settings)
             .map_err(|e| SceneError::new("tip", e.to_string()))?;
-        let s = self.scene.output_points_m(model.length_m())?;
-        let mut points = vec![ShapePoint::default(); s.len()];
-        model
-            .shape(&eq, &s, &mut points)
-            .map_err(|e| SceneError::new("output", e.to_string()))?;
+        let status = Status::new(&eq.report, settings.check_stability, None);
+        // A failed iterate is not an answer: nothing of it is printed (and its shape may not even
+        // be computable: a NonFinite iterate's base strain is NaN).
+        let answer = status.verdict.has_numbers();
+        let shape = if answer {
+            let s = self.scene.output_points_m(model.length_m())?;
+            let mut points = vec![ShapePoint::default(); s.len()];
+            model
+                .shape(&eq, &s, &mut points)
+                .map_err(|e| SceneError::new("output", e.to_string()))?;
+            Some(points.iter().map(point).collect())
+        } else {
+            None
+        };
         Ok(Solution {
             scene: self.scene.name.clone(),
             tip_force_n: arr(&self.load.force_n),
             tip_moment_nm: arr(&self.load.moment_nm),
             report: Report::from(&eq.report),
-            tip_position_m: arr(&eq.tip_position_m),
-            tip_tangent: arr(&eq.tip_tangent()),
-            cable_lengths_m: eq.cable_lengths_m.iter().copied().collect(),
-            shape: points.iter().map(point).collect(),
+            tip_position_m: answer.then(|| arr(&eq.tip_position_m)),
+            tip_tangent: answer.then(|| arr(&eq.tip_tangent())),
+            cable_lengths_m: answer.then(|| eq.cable_lengths_m.iter().copied().collect()),
+            shape,
+            status,
         })
     }
 }
 
-/// The result of `estimate`.
+/// The numbers of an estimate (present for an answer and for an inconsistent estimate's closest fit).
 #[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct EstimateOutput {
-    /// Scene name.
-    pub scene: String,
-    /// Measured cable lengths, m.
-    pub measured_m: Vec<f64>,
+pub struct EstimateNumbers {
     /// Estimated tip force, N.
+    #[serde(serialize_with = "real::many")]
     pub tip_force_n: [f64; 3],
     /// Its standard deviation, N.
+    #[serde(serialize_with = "real::many")]
     pub tip_force_std_n: [f64; 3],
     /// Tip position, m.
+    #[serde(serialize_with = "real::many")]
     pub tip_position_m: [f64; 3],
     /// Its standard deviation, m.
+    #[serde(serialize_with = "real::many")]
     pub tip_position_std_m: [f64; 3],
     /// Model minus measured, m.
+    #[serde(serialize_with = "real::many")]
     pub cable_residual_m: Vec<f64>,
     /// Singular values of the weighted sensitivity (per N), largest first.
+    #[serde(serialize_with = "real::many")]
     pub singular_values: [f64; 3],
     /// Their ratio.
+    #[serde(serialize_with = "real::one")]
     pub condition_number: f64,
     /// The least determined force direction (unit).
+    #[serde(serialize_with = "real::many")]
     pub weakest_direction: [f64; 3],
-    /// "Determined", "Weak", "Undetermined" or "Inconsistent".
-    pub determination: String,
-    /// Solve report.
-    pub report: Report,
     /// Backbone at the output points.
     pub shape: Vec<Point>,
 }
 
+/// The result of `estimate`. In JSON the numbers sit at the top level next to `status`, and are all
+/// `null` when there is no answer.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct EstimateOutput {
+    /// Whether this is an answer, and why not; with the determination.
+    pub status: Status,
+    /// Scene name.
+    pub scene: String,
+    /// Measured cable lengths, m (the input).
+    #[serde(serialize_with = "real::many")]
+    pub measured_m: Vec<f64>,
+    /// Solve report.
+    pub report: Report,
+    /// The estimate, unless there is no answer.
+    #[serde(flatten, serialize_with = "numbers_or_nulls")]
+    pub numbers: Option<EstimateNumbers>,
+}
+
+/// Flattens the estimate's numbers into the output, or writes each of their keys as `null`.
+fn numbers_or_nulls<S: serde::Serializer>(
+    numbers: &Option<EstimateNumbers>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    match numbers {
+        Some(n) => n.serialize(s),
+        None => {
+            let mut map = s.serialize_map(Some(ESTIMATE_KEYS.len()))?;
+            for key in ESTIMATE_KEYS {
+                map.serialize_entry(key, &())?;
+            }
+            map.end()
+        }
+    }
+}
+
+/// The keys of [`EstimateNumbers`], in order.
+const ESTIMATE_KEYS: [&str; 9] = [
+    "tip_force_n",
+    "tip_force_std_n",
+    "tip_position_m",
+    "tip_position_std_m",
+    "cable_residual_m",
+    "singular_values",
+    "condition_number",
+    "weakest_direction",
+    "shape",
+];
 /// `estimate`: the tip force from measured cable lengths (m), one per cable.
 #[derive(Debug)]
 pub struct Estimate<'a> {
@@ -227,46 +558,217 @@ impl WithModel for Estimate<'_> {
             &settings,
         )
         .map_err(|e| SceneError::new("--cables", e.to_string()))?;
-        let s = self.scene.output_points_m(model.length_m())?;
-        let mut points = vec![ShapePoint::default(); s.len()];
-        model
-            .shape_at(&est.base_strain_per_m, &est.load, &s, &mut points)
-            .map_err(|e| SceneError::new("output", e.to_string()))?;
         let q = &est.quality;
+        let status = Status::new(&est.report, settings.check_stability, Some(q.determination));
+        let numbers = if status.verdict.has_numbers() {
+            let s = self.scene.output_points_m(model.length_m())?;
+            let mut points = vec![ShapePoint::default(); s.len()];
+            model
+                .shape_at(&est.base_strain_per_m, &est.load, &s, &mut points)
+                .map_err(|e| SceneError::new("output", e.to_string()))?;
+            Some(EstimateNumbers {
+                tip_force_n: arr(&est.params),
+                tip_force_std_n: arr(&q.force_std_n),
+                tip_position_m: arr(&est.tip_position_m),
+                tip_position_std_m: arr(&q.tip_std_m),
+                cable_residual_m: est
+                    .cable_residual_m
+                    .iter()
+                    .take(self.measured_m.len())
+                    .copied()
+                    .collect(),
+                singular_values: arr(&q.singular_values),
+                condition_number: q.condition_number,
+                weakest_direction: arr(&q.weakest_direction),
+                shape: points.iter().map(point).collect(),
+            })
+        } else {
+            None
+        };
         Ok(EstimateOutput {
+            status,
             scene: self.scene.name.clone(),
             measured_m: self.measured_m.clone(),
-            tip_force_n: arr(&est.params),
-            tip_force_std_n: arr(&q.force_std_n),
-            tip_position_m: arr(&est.tip_position_m),
-            tip_position_std_m: arr(&q.tip_std_m),
-            cable_residual_m: est
-                .cable_residual_m
-                .iter()
-                .take(self.measured_m.len())
-                .copied()
-                .collect(),
-            singular_values: arr(&q.singular_values),
-            condition_number: q.condition_number,
-            weakest_direction: arr(&q.weakest_direction),
-            determination: format!("{:?}", q.determination),
             report: Report::from(&est.report),
-            shape: points.iter().map(point).collect(),
+            numbers,
         })
     }
 }
 
-/// The shape as CSV: `s_m,x_m,y_m,z_m,tx,ty,tz,ux,uy,uz`.
-pub fn shape_csv(shape: &[Point]) -> String {
-    let mut out = String::from("s_m,x_m,y_m,z_m,tan_x,tan_y,tan_z,u_x_per_m,u_y_per_m,u_z_per_m\n");
-    for p in shape {
-        let [x, y, z] = p.position_m;
-        let [tx, ty, tz] = p.tangent;
-        let [ux, uy, uz] = p.strain_per_m;
-        out.push_str(&format!(
-            "{},{x},{y},{z},{tx},{ty},{tz},{ux},{uy},{uz}\n",
-            p.s_m
-        ));
+/// The CSV's columns: the backbone point, then the status.
+pub const CSV_HEADER: &str =
+    "s_m,x_m,y_m,z_m,tan_x,tan_y,tan_z,u_x_per_m,u_y_per_m,u_z_per_m,status";
+
+/// The shape as CSV: [`CSV_HEADER`], then one row per point with the status ([`Status::csv_cell`]) in
+/// its last column. Without an answer (`shape` is `None`) the only row after the header has empty
+/// number fields and the status, so the file itself says why it holds no shape, and a reader that
+/// parses the numbers gets empty fields (NaN, or an error), never a failed iterate's.
+pub fn shape_csv(shape: Option<&[Point]>, status: &Status) -> String {
+    let cell = csv_field(&status.csv_cell());
+    let mut out = format!("{CSV_HEADER}\n");
+    match shape {
+        Some(shape) => {
+            for p in shape {
+                let [x, y, z] = p.position_m;
+                let [tx, ty, tz] = p.tangent;
+                let [ux, uy, uz] = p.strain_per_m;
+                let _ = writeln!(
+                    out,
+                    "{},{x},{y},{z},{tx},{ty},{tz},{ux},{uy},{uz},{cell}",
+                    p.s_m
+                );
+            }
+        }
+        None => {
+            let _ = writeln!(out, ",,,,,,,,,,{cell}");
+        }
     }
     out
+}
+
+/// A CSV field, quoted if it holds a comma, a quote or a line break (RFC 4180).
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use model_core::Stability;
+
+    fn report(termination: Termination, stability: Stability<f64>) -> SolveReport<f64> {
+        SolveReport {
+            termination,
+            iterations: 3,
+            sweeps: 4,
+            residual: f64::NAN,
+            load_steps: 0,
+            stability,
+        }
+    }
+
+    #[test]
+    fn non_finite_numbers_are_strings_in_json() {
+        let r = Report::from(&report(Termination::NonFinite, Stability::Unchecked));
+        let v = serde_json::to_value(&r).unwrap();
+        assert_eq!(v["residual"], "NaN");
+        let p = Point {
+            s_m: 0.0,
+            position_m: [f64::INFINITY, f64::NEG_INFINITY, 1.5],
+            tangent: [0.0; 3],
+            strain_per_m: [0.0; 3],
+        };
+        let v = serde_json::to_value(&p).unwrap();
+        assert_eq!(
+            v["position_m"],
+            serde_json::json!(["Infinity", "-Infinity", 1.5])
+        );
+    }
+
+    #[test]
+    fn a_failed_estimate_has_the_same_keys_as_an_answer_all_null() {
+        let numbers = EstimateNumbers {
+            tip_force_n: [0.0; 3],
+            tip_force_std_n: [0.0; 3],
+            tip_position_m: [0.0; 3],
+            tip_position_std_m: [0.0; 3],
+            cable_residual_m: vec![0.0],
+            singular_values: [0.0; 3],
+            condition_number: 1.0,
+            weakest_direction: [0.0; 3],
+            shape: Vec::new(),
+        };
+        let keys = |v: &serde_json::Value| -> Vec<String> {
+            v.as_object().unwrap().keys().cloned().collect()
+        };
+        let answer = serde_json::to_value(&numbers).unwrap();
+        // serde_json's map is sorted by key.
+        let mut expected = ESTIMATE_KEYS.map(String::from).to_vec();
+        expected.sort();
+        assert_eq!(keys(&answer), expected);
+        let status = Status::new(
+            &report(Termination::Stalled, Stability::Unchecked),
+            true,
+            Some(Determination::Determined),
+        );
+        let failed = EstimateOutput {
+            status,
+            scene: String::new(),
+            measured_m: vec![0.39],
+            report: Report::from(&report(Termination::Stalled, Stability::Unchecked)),
+            numbers: None,
+        };
+        let v = serde_json::to_value(&failed).unwrap();
+        for key in ESTIMATE_KEYS {
+            assert!(v.get(key).is_some_and(serde_json::Value::is_null), "{key}");
+        }
+        assert!(v["status"]["determination"].is_null());
+    }
+
+    #[test]
+    fn the_verdict_follows_termination_stability_and_determination() {
+        let stable = Stability::Stable;
+        let cases = [
+            (Termination::Converged, stable, None, Verdict::Answer),
+            (Termination::Stalled, stable, None, Verdict::NoAnswer),
+            (Termination::FrameDrift, stable, None, Verdict::NoAnswer),
+            (
+                Termination::Unstable,
+                Stability::ConjugatePoint(0.2),
+                None,
+                Verdict::NoAnswer,
+            ),
+            // Converged but unstable (model-core reports it as `Unstable`; never an answer here).
+            (
+                Termination::Converged,
+                Stability::FreeEndUnstable,
+                None,
+                Verdict::NoAnswer,
+            ),
+            (
+                Termination::Converged,
+                stable,
+                Some(Determination::Inconsistent),
+                Verdict::Inconsistent,
+            ),
+            (
+                Termination::Converged,
+                stable,
+                Some(Determination::Weak),
+                Verdict::Answer,
+            ),
+            (
+                Termination::Converged,
+                stable,
+                Some(Determination::Undetermined),
+                Verdict::Answer,
+            ),
+            // No answer comes first: an inconsistent verdict on a failed iterate is exit 3.
+            (
+                Termination::IterationLimit,
+                Stability::Unchecked,
+                Some(Determination::Inconsistent),
+                Verdict::NoAnswer,
+            ),
+        ];
+        for (termination, stability, determination, verdict) in cases {
+            let s = Status::new(&report(termination, stability), true, determination);
+            assert_eq!(
+                s.verdict, verdict,
+                "{termination:?} {stability:?} {determination:?}"
+            );
+            assert_eq!(s.exit_code, verdict.exit_code());
+        }
+    }
+
+    #[test]
+    fn csv_status_cells_are_quoted_when_needed() {
+        assert_eq!(csv_field("Converged/Stable"), "Converged/Stable");
+        assert_eq!(csv_field("A { b: 1, c: 2 }"), "\"A { b: 1, c: 2 }\"");
+        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
+    }
 }

@@ -4,16 +4,107 @@
 //!
 //! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`]; every error names the
 //! field and the reason.
+//!
+//! Sizes are checked before anything is sized by them: a count read from the file (`guides.count`,
+//! `output.points`) is checked against its limit ([`model_core::MAX_GUIDES`],
+//! [`MAX_OUTPUT_POINTS`]) before a vector is built from it, and the RK4 steps of all sections together
+//! against [`MAX_TOTAL_STEPS`], so a mistyped number is a [`SceneError`] naming the key and the limit,
+//! never a panic, an aborted allocation or a solve that runs for minutes. [`Scene::parse`] runs these
+//! checks; the methods that expand the counts run them again, since a `Scene`'s fields are public.
 
 use std::fmt;
 use std::path::Path;
 
 use model_core::{
-    Cable, CrossSection, Guide, GuideMass, Material, PointLoad, Rod, Section, ShootingSettings,
-    Stiffness, StrainModel, TipLoad,
+    Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, Material, PointLoad, Rod,
+    Section, ShootingSettings, Stiffness, StrainModel, TipLoad,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
+
+/// Most output points (`output.points`, or the length of `output.s_m`): far more than a plot or a
+/// comparison needs, and small enough that the shape (about 100 bytes a point, more as JSON) stays
+/// well within memory.
+pub const MAX_OUTPUT_POINTS: usize = 100_000;
+
+/// Most RK4 steps in one sweep, summed over the sections' `steps`. A solve takes up to several hundred
+/// sweeps (426 for a load continuation that fails on the 3D bench), at about 0.4 us a step on a
+/// desktop: this many steps keep the worst solve within seconds (a scene of 8 sections x 65 535 steps
+/// took 84 s), and it is 100 times what the shipped scenes use.
+pub const MAX_TOTAL_STEPS: u32 = 20_000;
+
+/// A count read from a scene file (`guides.count`, `output.points`), kept as written until it is
+/// checked against its limit: any TOML number is accepted here, so that a negative, fractional or huge
+/// value is refused by [`Count::checked`] with the key and the limit rather than by the TOML parser
+/// with a type name. A float with a whole value (`points = 1e3`) counts as that whole number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Count {
+    /// Written as an integer.
+    Integer(i128),
+    /// Written as a float.
+    Float(f64),
+}
+
+impl Count {
+    /// The count, if it is a whole number in `min..=max`; otherwise an error at `field` that names the
+    /// limits (`limit` says where `max` comes from).
+    pub fn checked(
+        self,
+        field: &str,
+        min: usize,
+        max: usize,
+        limit: &str,
+    ) -> Result<usize, SceneError> {
+        let whole = match self {
+            Self::Integer(n) => Some(n),
+            // A whole float converts exactly, or saturates far beyond any limit.
+            Self::Float(x) if x.is_finite() && x.fract() == 0.0 => Some(x as i128),
+            Self::Float(_) => None,
+        };
+        whole
+            .and_then(|n| usize::try_from(n).ok())
+            .filter(|n| (min..=max).contains(n))
+            .ok_or_else(|| {
+                SceneError::new(
+                    field,
+                    format!(
+                        "{self} is not allowed: must be a whole number from {min} to {max} ({limit})"
+                    ),
+                )
+            })
+    }
+}
+
+impl fmt::Display for Count {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Integer(n) => write!(f, "{n}"),
+            Self::Float(x) => write!(f, "{x:?}"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Count {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Count;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a whole number")
+            }
+            fn visit_i64<E>(self, n: i64) -> Result<Count, E> {
+                Ok(Count::Integer(n.into()))
+            }
+            fn visit_u64<E>(self, n: u64) -> Result<Count, E> {
+                Ok(Count::Integer(n.into()))
+            }
+            fn visit_f64<E>(self, x: f64) -> Result<Count, E> {
+                Ok(Count::Float(x))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
+}
 
 /// Why a scene could not be used: the field and the reason.
 #[derive(Debug, Clone, PartialEq)]
@@ -173,8 +264,8 @@ pub struct Guides {
     pub first_centre_m: Option<f64>,
     /// Centre-to-centre spacing, m.
     pub pitch_m: Option<f64>,
-    /// Number of evenly spaced guides.
-    pub count: Option<usize>,
+    /// Number of evenly spaced guides (at most [`model_core::MAX_GUIDES`]).
+    pub count: Option<Count>,
     /// Explicit centres, m.
     pub centres_m: Option<Vec<f64>>,
     /// Thickness along the backbone, m.
@@ -239,13 +330,13 @@ pub struct TipSpec {
 pub struct Output {
     /// Arc lengths, m, increasing.
     pub s_m: Option<Vec<f64>>,
-    /// Evenly spaced points including both ends.
+    /// Evenly spaced points including both ends (at most [`MAX_OUTPUT_POINTS`]).
     #[serde(default = "default_points")]
-    pub points: usize,
+    pub points: Count,
 }
 
-fn default_points() -> usize {
-    41
+fn default_points() -> Count {
+    Count::Integer(41)
 }
 
 impl Default for Output {
@@ -272,7 +363,9 @@ pub struct Solver {
     /// Newton iterations.
     #[serde(default = "default_iterations")]
     pub max_iterations: u16,
-    /// Run the stability test on answers.
+    /// Run the stability test on answers. Without it an unstable equilibrium (a wrong branch: buckled,
+    /// upside down, looped) is reported as converged; `solve` and `estimate` warn and say so in their
+    /// status.
     #[serde(default = "default_true")]
     pub check_stability: bool,
 }
@@ -355,8 +448,15 @@ fn finite(field: &str, x: f64) -> Result<f64, SceneError> {
 }
 
 impl Scene {
-    /// Parses a scene from TOML text; `origin` names it in errors.
+    /// Parses a scene from TOML text; `origin` names it in errors. Checks every size (see the
+    /// module's documentation) before returning.
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        let scene = Self::parse_unchecked(text, origin)?;
+        scene.check_sizes()?;
+        Ok(scene)
+    }
+
+    fn parse_unchecked(text: &str, origin: &str) -> Result<Self, SceneError> {
         toml::from_str(text).map_err(|e| {
             let message = e.message().to_string();
             // Name the place by line number and by the line itself, which shows the key.
@@ -371,6 +471,67 @@ impl Scene {
                 .unwrap_or_else(|| origin.to_string());
             SceneError::new(place, message)
         })
+    }
+
+    /// Every count and size the scene expands into vectors or work, against its limit: the sections
+    /// (at most [`MAX_SECTIONS`]) and their steps summed ([`MAX_TOTAL_STEPS`]), the guides, the output
+    /// points. Nothing here allocates in proportion to a number read from the file.
+    pub fn check_sizes(&self) -> Result<(), SceneError> {
+        if self.sections.len() > MAX_SECTIONS {
+            return Err(SceneError::new(
+                "section",
+                format!(
+                    "{} sections; at most {MAX_SECTIONS} (model-core's MAX_SECTIONS)",
+                    self.sections.len()
+                ),
+            ));
+        }
+        self.total_steps()?;
+        if let Some(guides) = &self.guides {
+            guides.count()?;
+        }
+        self.output_point_count()?;
+        Ok(())
+    }
+
+    /// RK4 steps in one sweep, summed over the sections (the plan adds at most one a guide, load or
+    /// section end), if within [`MAX_TOTAL_STEPS`].
+    pub fn total_steps(&self) -> Result<u32, SceneError> {
+        // u16 steps over at most a few sections: no overflow in u64 whatever the section count.
+        let total: u64 = self.sections.iter().map(|s| u64::from(s.steps)).sum();
+        u32::try_from(total)
+            .ok()
+            .filter(|t| *t <= MAX_TOTAL_STEPS)
+            .ok_or_else(|| {
+                SceneError::new(
+                    "section[].steps",
+                    format!(
+                        "the sections' steps add up to {total} RK4 steps per sweep; at most \
+                         {MAX_TOTAL_STEPS} (host-sim's limit: a solve takes up to several hundred \
+                         sweeps, and this keeps it within seconds)"
+                    ),
+                )
+            })
+    }
+
+    /// How many output points the scene asks for, if within [`MAX_OUTPUT_POINTS`].
+    pub fn output_point_count(&self) -> Result<usize, SceneError> {
+        match &self.output.s_m {
+            Some(s) if s.len() > MAX_OUTPUT_POINTS => Err(SceneError::new(
+                "output.s_m",
+                format!(
+                    "{} arc lengths; at most {MAX_OUTPUT_POINTS} (host-sim's MAX_OUTPUT_POINTS)",
+                    s.len()
+                ),
+            )),
+            Some(s) => Ok(s.len()),
+            None => self.output.points.checked(
+                "output.points",
+                2,
+                MAX_OUTPUT_POINTS,
+                "host-sim's MAX_OUTPUT_POINTS",
+            ),
+        }
     }
 
     /// Reads and parses a scene file.
@@ -437,8 +598,9 @@ impl Scene {
         })
     }
 
-    /// The output arc lengths, m.
+    /// The output arc lengths, m (their number checked before they are built).
     pub fn output_points_m(&self, length_m: f64) -> Result<Vec<f64>, SceneError> {
+        let n = self.output_point_count()?;
         match &self.output.s_m {
             Some(s) => {
                 let mut previous = 0.0;
@@ -459,10 +621,7 @@ impl Scene {
                 Ok(s.clone())
             }
             None => {
-                let n = self.output.points;
-                if n < 2 {
-                    return Err(SceneError::new("output.points", "must be at least 2"));
-                }
+                // n >= 2 (output_point_count).
                 Ok((0..n)
                     .map(|i| length_m * i as f64 / (n - 1) as f64)
                     .collect())
@@ -496,6 +655,7 @@ impl Scene {
                 "at least one [[section]] is needed",
             ));
         }
+        self.check_sizes()?;
         for (i, spec) in self.sections.iter().enumerate() {
             let section = spec.section(&format!("section[{i}]"))?;
             rod.push_section(section).map_err(|_| cap("section"))?;
@@ -679,15 +839,34 @@ impl SectionSpec {
 }
 
 impl Guides {
+    /// How many guides: `count`, or the length of `centres_m`, if within [`MAX_GUIDES`].
+    pub fn count(&self) -> Result<usize, SceneError> {
+        match (&self.centres_m, self.count) {
+            (Some(c), None) if c.len() > MAX_GUIDES => Err(SceneError::new(
+                "guides.centres_m",
+                format!(
+                    "{} centres; at most {MAX_GUIDES} (model-core's MAX_GUIDES)",
+                    c.len()
+                ),
+            )),
+            (Some(c), None) => Ok(c.len()),
+            (None, Some(count)) => {
+                count.checked("guides.count", 0, MAX_GUIDES, "model-core's MAX_GUIDES")
+            }
+            _ => Err(SceneError::new(
+                "guides",
+                "give either centres_m, or all of first_centre_m, pitch_m and count",
+            )),
+        }
+    }
+
     fn guides(&self) -> Result<Vec<Guide<f64>>, SceneError> {
-        let centres: Vec<f64> = match (
-            &self.centres_m,
-            self.first_centre_m,
-            self.pitch_m,
-            self.count,
-        ) {
-            (Some(c), None, None, None) => c.clone(),
-            (None, Some(first), Some(pitch), Some(count)) => {
+        let count = self.count()?;
+        let centres: Vec<f64> = match (&self.centres_m, self.first_centre_m, self.pitch_m) {
+            (Some(c), None, None) => c.clone(),
+            (None, Some(first), Some(pitch)) => {
+                let first = finite("guides.first_centre_m", first)?;
+                let pitch = finite("guides.pitch_m", pitch)?;
                 (0..count).map(|k| first + k as f64 * pitch).collect()
             }
             _ => {
@@ -708,5 +887,36 @@ impl Guides {
                 })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_are_checked_against_their_limit() {
+        let check = |c: Count| c.checked("k", 2, 16, "the limit");
+        assert_eq!(check(Count::Integer(16)), Ok(16));
+        assert_eq!(check(Count::Float(1e1)), Ok(10));
+        for bad in [
+            Count::Integer(17),
+            Count::Integer(1),
+            Count::Integer(-1),
+            Count::Integer(i128::from(i64::MAX)),
+            Count::Float(2.5),
+            Count::Float(1e12),
+            Count::Float(1e300),
+            Count::Float(f64::NAN),
+            Count::Float(f64::INFINITY),
+            Count::Float(-3.0),
+        ] {
+            let e = check(bad).unwrap_err();
+            assert_eq!(e.field, "k");
+            assert!(
+                e.reason.contains("from 2 to 16") && e.reason.contains("the limit"),
+                "{e}"
+            );
+        }
     }
 }
