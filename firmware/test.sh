@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Every firmware check, from any working directory:
-#   formatting, host tests of the library, clippy -D warnings (host tests and target build),
-#   the QEMU images (selftest, golden, e2e, estimator, bench, and the fault and panic images that
-#   must exit with failure rather than hang), the board image (build only: it needs the real
-#   STM32F405's clock tree), and the estimator image's flash/RAM budget against the committed
-#   expected values in expected/.
+#   formatting, host tests of the library (the fault scenarios listed apart), clippy -D warnings
+#   (host tests and target build), the QEMU images (selftest, golden, e2e, the RTIC estimator image
+#   and its sampling through a cold estimate, bench, and the fault and panic images that must exit
+#   with failure rather than hang), the board image (build only: it needs the real STM32F405's
+#   clock tree), and the estimator image's flash/RAM budget against the committed expected values
+#   in expected/.
 #
 # Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it installs
 # nothing and says what is missing. Environment:
@@ -153,6 +154,8 @@ bench_expected() {
 
 check "cargo fmt --check" cargo fmt --check
 check "host tests (cargo test --lib --target $HOST)" cargo test --lib --target "$HOST"
+check "host fault scenarios (outage, slipped magnet, power-up off home, stuck sensor, slack cable)" \
+    cargo test --lib --target "$HOST" scenarios:: -- --nocapture
 check "clippy: host lib and tests" cargo clippy --lib --tests --target "$HOST" -- -D warnings
 check "clippy: target lib and images (with the board image)" \
     cargo clippy --release --features board --lib --bins -- -D warnings
@@ -160,14 +163,18 @@ check "build the QEMU images (release, $TARGET)" cargo build --release --bins
 check "QEMU selftest: model-core self-checks in f32" run_image selftest 0 '^[0-9]+ passed, 0 failed$'
 check "QEMU golden: golden rows from cable lengths, tip within 0.1 mm" run_image golden 0 '^golden: [0-9]+ passed, 0 failed$'
 check "QEMU e2e: recorded encoder trajectory against the f64 reference" run_image e2e 0 '^e2e: [0-9]+ passed, 0 failed$'
-check "QEMU estimator: the production loop with defmt" run_image estimator 0 '^estimator: '
+check "QEMU estimator: RTIC sampler at 1 kHz and the production loop with defmt" \
+    run_image estimator 0 '^estimator: [0-9]+ ticks, [0-9]+ fresh, 2 injected faults refused$'
+check "QEMU estimator: the sampler keeps 1 kHz of virtual time through the cold estimate" \
+    grep -E '^estimator: sampling during the cold estimate: [0-9]+ samples in [0-9]+ us of virtual time \(1 kHz\)$' \
+    "$OUT/estimator.out"
 check "QEMU bench: instruction counts" run_image bench 0 '^bench case=update_warm'
 check "bench instruction counts match expected/bench.run" bench_expected
 check "QEMU fault: HardFault reports and exits 1" run_image fault 1 '^hard fault: pc'
 check "QEMU panic: panic reports and exits 1" run_image panic 1 'panicked at'
 check "estimator image within budget, sizes match expected/estimator.size" budget
-# Last: the `board` feature brings stm32f4xx-hal, whose PAC turns on cortex-m-rt's device vectors
-# for every image built with it, so the QEMU images above are built without it.
+# Last: the `board` feature adds stm32f4xx-hal to the library's dependencies, and building it in
+# between would rebuild the QEMU images (which do not use it).
 check "build the board image (build only: it needs the real STM32F405's clock tree)" \
     cargo build --release --features board --bin board
 

@@ -1,8 +1,9 @@
 //! The checks the QEMU images run, target-agnostic so that the host tests run the same code.
 //!
-//! * [`run_trajectory`]: the recorded encoder trajectory ([`crate::fixture::ANGLE_COUNTS`]) through spool
-//!   encoders and the estimator loop, each tick against the f64 reference, with a sensor fault and a
-//!   jump injected on the way (both must be refused and the last estimate kept).
+//! * [`run_trajectory`]: the recorded encoder trajectory ([`crate::fixture::ANGLE_COUNTS`]) through
+//!   the sampler (ten samples a tick, each cross-checked against the recorded steppers) and the
+//!   estimator loop, each tick against the f64 reference, with a sensor fault and a glitch injected
+//!   on the way (both must be refused, the last estimate kept, and no fault latched).
 //! * [`run_golden`]: the golden 3D rows, from their cable lengths alone.
 //!
 //! Its host tests also hold the composition root's robot ([`crate::config::rod`]) equal to the
@@ -11,14 +12,14 @@
 use model_checks::reference::golden_rows;
 use model_core::{ModelError, Termination};
 
-use crate::config::{BenchModel, MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
-use crate::control::{EstimatorLoop, Status, TickRecord, read_all};
+use crate::config::{BenchModel, SAMPLES_PER_TICK, loop_config};
+use crate::control::{EstimatorLoop, Status, TickRecord};
 use crate::encoder::replay::ReplayError;
-use crate::encoder::{SpoolEncoder, SpoolError};
 use crate::fixture::{
-    JUMP_TICK, REFERENCE, RecordedSensor, Reference, SENSOR_FAULT_TICK, TICK_COUNT,
+    JUMP_COUNTS, JUMP_TICK, REFERENCE, RecordedSensor, RecordedSteppers, Reference,
+    SENSOR_FAULT_TICK, TICK_COUNT,
 };
-use crate::spool::CalibrationError;
+use crate::sampler::{SampleError, SamplerError};
 use crate::validate::Rejection;
 use model_core::inverse::{Estimator, LoadBasis};
 use nalgebra::Vector3;
@@ -40,8 +41,8 @@ pub const FORCE_TOLERANCE_N: f64 = 5.0e-3;
 pub enum SetupError {
     /// The model or the loop refused its configuration.
     Model(ModelError),
-    /// A spool calibration was refused.
-    Calibration(CalibrationError),
+    /// The sampler refused its sensors, calibrations or settings.
+    Sampler(SamplerError),
 }
 
 impl From<ModelError> for SetupError {
@@ -50,9 +51,9 @@ impl From<ModelError> for SetupError {
     }
 }
 
-impl From<CalibrationError> for SetupError {
-    fn from(e: CalibrationError) -> Self {
-        Self::Calibration(e)
+impl From<SamplerError> for SetupError {
+    fn from(e: SamplerError) -> Self {
+        Self::Sampler(e)
     }
 }
 
@@ -63,7 +64,7 @@ pub enum Expected {
     Fresh,
     /// The injected sensor fault refused, the last estimate kept.
     SensorFault,
-    /// The injected jump refused, the last estimate kept.
+    /// The injected glitch refused by the stepper cross-check, the last estimate kept.
     Jump,
 }
 
@@ -75,7 +76,7 @@ pub struct TickCheck {
     /// What it had to do.
     pub expected: Expected,
     /// What the loop said.
-    pub status: Status<SpoolError<ReplayError>>,
+    pub status: Status<SampleError<ReplayError>>,
     /// The tick of the estimate the loop reported (`None` if it had none).
     pub estimate_tick: Option<u32>,
     /// Tip error of that estimate against the reference at its own tick, m.
@@ -84,7 +85,7 @@ pub struct TickCheck {
     pub force_error_n: f64,
     /// Sweeps the estimate took.
     pub sweeps: u16,
-    /// The tick's cost (reading the encoders, the loop's tick) in the caller's clock units.
+    /// The loop tick's cost in the caller's clock units (the sampling is counted apart).
     pub cost: u64,
     /// Whether the tick did what was expected, within tolerance.
     pub passed: bool,
@@ -105,6 +106,9 @@ pub struct Summary {
     pub max_sweeps: u16,
     /// The costliest warm tick (every tick but the first), in the caller's clock units.
     pub max_warm_cost: u64,
+    /// The costliest sample (three sensors read, tracked and cross-checked), in the caller's clock
+    /// units.
+    pub max_sample_cost: u64,
 }
 
 impl Summary {
@@ -145,32 +149,36 @@ fn errors(record: &TickRecord, reference: &Reference) -> (f64, f64) {
     )
 }
 
-/// Replays the recorded trajectory through three spool encoders and the estimator loop on `model`,
-/// calling `report` with each tick's verdict. `clock` measures each tick's cost (an instruction
-/// counter on the MCU; anything monotonic, or a constant, on the host).
+/// Replays the recorded trajectory through the sampler (ten samples a tick, against the recorded
+/// steppers) and the estimator loop on `model`, calling `report` with each tick's verdict. Each tick
+/// takes the sample of its recorded instant. `clock` measures each tick's and each sample's cost (an
+/// instruction counter on the MCU; anything monotonic, or a constant, on the host).
 ///
 /// # Errors
-/// [`SetupError`] when the loop or a spool refuses its configuration.
+/// [`SetupError`] when the loop or the sampler refuses its configuration.
 pub fn run_trajectory(
     model: &BenchModel,
     clock: &dyn Fn() -> u64,
     mut report: impl FnMut(&TickCheck),
 ) -> Result<Summary, SetupError> {
     let mut estimator = EstimatorLoop::new(model, loop_config())?;
-    let [s0, s1, s2] = spools::<f32>();
-    let spool = |cable, calibration| {
-        SpoolEncoder::new(
-            RecordedSensor::new(cable),
-            calibration,
-            MAX_UNWRAP_STEP_COUNTS,
-        )
-    };
-    let mut sources = [spool(0, s0)?, spool(1, s1)?, spool(2, s2)?];
+    let mut sampler = crate::config::sampler([0, 1, 2].map(|c| RecordedSensor::new(c, 0)))?;
+    let mut steppers = RecordedSteppers::new(0);
     let mut summary = Summary::default();
     for tick in 0..TICK_COUNT {
+        // The samples up to this tick's instant: the loop takes the last.
+        let due = tick as u32 * SAMPLES_PER_TICK;
+        let sample = loop {
+            let steps = steppers.commanded_steps(sampler.next_seq());
+            let start = clock();
+            let sample = sampler.sample(steps);
+            summary.max_sample_cost = summary.max_sample_cost.max(clock().saturating_sub(start));
+            if sample.seq >= due {
+                break sample;
+            }
+        };
         let start = clock();
-        let readings = read_all(&mut sources);
-        let out = estimator.tick(&readings);
+        let out = estimator.tick(&sample);
         let cost = clock().saturating_sub(start);
         if tick > 0 {
             summary.max_warm_cost = summary.max_warm_cost.max(cost);
@@ -187,14 +195,27 @@ pub fn run_trajectory(
                     Expected::SensorFault,
                     Status::Rejected(Rejection::Source {
                         cable: 1,
-                        error: SpoolError::Sensor(ReplayError::Injected),
+                        error: SampleError::Sensor(ReplayError::Injected),
                     })
                 )
                 | (
                     Expected::Jump,
-                    Status::Rejected(Rejection::Jump { cable: 2, .. })
+                    Status::Rejected(Rejection::Source {
+                        cable: 2,
+                        error: SampleError::Disagrees { .. },
+                    })
                 )
         );
+        // The glitch is refused as what it is: the stepper's position plus the glitch.
+        let glitch_named = match out.status {
+            Status::Rejected(Rejection::Source {
+                error: SampleError::Disagrees { deviation_counts },
+                ..
+            }) => deviation_counts.abs_diff(i32::from(JUMP_COUNTS)) <= 8,
+            _ => true,
+        };
+        // No fault may be latched on good data.
+        let status_ok = status_ok && glitch_named && sampler.faults() == [None; 3];
         // A fresh estimate is this tick's; a refused tick must keep the previous tick's.
         let wanted_tick = match expected {
             Expected::Fresh => tick,

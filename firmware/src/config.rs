@@ -1,6 +1,7 @@
 //! What the firmware runs, and the one place that says so (the composition root): the three-cable
 //! bench (a 39 cm Nitinol rod, five guides, cables at 0/120/240 degrees) built here from its
-//! constants in SI units at [`STEPS_PER_SECTION`], three AS5047P spools, a 100 Hz loop.
+//! constants in SI units at [`STEPS_PER_SECTION`], three stepper-driven spools with AS5047P
+//! sensors sampled and cross-checked at 1 kHz, a 100 Hz estimator loop.
 //! The library's other modules take the model and settings they are given.
 //!
 //! The robot is the golden reference's bench (thesis experiment 2, average-mass model); a host test
@@ -15,8 +16,11 @@ use model_core::{
 use nalgebra::{Vector2, Vector3};
 
 use crate::control::{LoopConfig, SHAPE_POINTS};
+use crate::encoder::AngleSensor;
 use crate::encoder::as5047p::COUNTS_PER_TURN;
+use crate::sampler::{Sampler, SamplerError, SamplerSettings};
 use crate::spool::{Direction, SpoolCalibration};
+use crate::stepper::{ScaleError, StepperScale};
 
 /// Free length of the rod (one section): 40 cm of Nitinol, 1 cm of it in the base clamp, m.
 pub const ROD_LENGTH_M: f64 = 0.39;
@@ -65,8 +69,18 @@ pub const GRAVITY_M_S2: f64 = 9.81;
 /// f32 inverse reproduces the golden tips within 0.02 mm; the cost of a sweep is linear in it.
 pub const STEPS_PER_SECTION: u16 = 20;
 
-/// Control period, s (100 Hz).
+/// Estimator (control) period, s (100 Hz).
 pub const TICK_PERIOD_S: f32 = 0.01;
+
+/// Sampler rate, Hz: every encoder is read, tracked and cross-checked against its stepper once a
+/// millisecond, in a timer task that preempts the estimator.
+pub const SAMPLE_RATE_HZ: u32 = 1000;
+
+/// Sampler period, s.
+pub const SAMPLE_PERIOD_S: f32 = 1.0 / SAMPLE_RATE_HZ as f32;
+
+/// Samples per estimator tick.
+pub const SAMPLES_PER_TICK: u32 = 10;
 
 /// Fastest cable speed the drives can produce, m/s: 0.5 mm per tick.
 pub const MAX_CABLE_SPEED_M_PER_S: f32 = 0.05;
@@ -82,20 +96,71 @@ pub const SPOOL_RADIUS_M: f64 = 0.005;
 /// by about 10 um. A sensor on the spool itself (ratio 1, 1.9 um a count) moves it by up to 0.1 mm.
 pub const GEAR_RATIO: u32 = 8;
 
-/// Largest angle step the turn tracker accepts between reads, counts: three eighths of a sensor
-/// turn, 1.47 mm of cable (three times the speed limit, short of the half turn that would alias).
-pub const MAX_UNWRAP_STEP_COUNTS: u32 = COUNTS_PER_TURN * 3 / 8;
+/// Cable per sensor turn, m: `2 pi r / GEAR_RATIO`, 3.93 mm (half a turn: 1.96 mm).
+pub const METRES_PER_SENSOR_TURN: f64 =
+    2.0 * core::f64::consts::PI * SPOOL_RADIUS_M / GEAR_RATIO as f64;
 
-/// Cable lengths at the calibration pose, m: the bench under a 0.14 N downward and 0.12 N sideways
-/// tip force (the recorded trajectory's first tick). A single-turn sensor behind a gearhead knows
-/// its turn only from a known pose: at power-up each cable must be within half a sensor turn
-/// (0.98 mm) of it.
+/// Full steps per motor turn (a 1.8 degree hybrid stepper; the sensor sits on its shaft).
+pub const MOTOR_FULL_STEPS_PER_TURN: u32 = 200;
+
+/// The drivers' microstepping.
+pub const MICROSTEPS_PER_FULL_STEP: u32 = 16;
+
+/// Microsteps per motor (and sensor) turn: 3200, 5.12 sensor counts each.
+pub const MICROSTEPS_PER_TURN: u32 = MOTOR_FULL_STEPS_PER_TURN * MICROSTEPS_PER_FULL_STEP;
+
+/// How far the sensor may be from the stepper's commanded position, counts: one full step (81
+/// counts, 19.5 um of cable). A loaded stepper lags its command by under a full step before it slips
+/// (and a slip loses four full steps at a time); microstep error and the few microseconds between
+/// reading the step counter and the sensor add a few counts. A sensor error smaller than this is
+/// not seen by the cross-check (README.md, "Faults").
+pub const CROSS_CHECK_TOLERANCE_COUNTS: u32 = COUNTS_PER_TURN / MOTOR_FULL_STEPS_PER_TURN;
+
+/// An angle that moves by no more than this has not moved (the AS5047P's noise is a few counts).
+pub const STILL_COUNTS: u32 = 4;
+
+/// Refused samples in a row before their cause is named (a stuck sensor, a slipped magnet, turn
+/// aliasing, power-up away from home): 10 ms.
+pub const PERSIST_SAMPLES: u16 = 10;
+
+/// Refused samples in a row after which a cable's turn is no longer known (the fault
+/// `RefusalStreak`, until re-homed): 25 ms. At the speed limit the shaft turns
+/// [`MAX_STEP_COUNTS_PER_SAMPLE`] counts a sample, so by then it may have moved 26 * 209 = 5434
+/// counts since the last accepted read: one more tolerance and it stays below half a turn (8192),
+/// where the nearest-turn rule would alias.
+pub const MAX_REFUSED_SAMPLES: u16 = 25;
+
+/// The most the shaft turns in one sample at [`MAX_CABLE_SPEED_M_PER_S`], counts, rounded up:
+/// 0.05 mm of cable a millisecond over 0.24 um a count, 209.
+pub const MAX_STEP_COUNTS_PER_SAMPLE: u32 = (MAX_CABLE_SPEED_M_PER_S as f64
+    / SAMPLE_RATE_HZ as f64
+    / (METRES_PER_SENSOR_TURN / COUNTS_PER_TURN as f64))
+    as u32
+    + 1;
+
+// The streak limit keeps the nearest-turn rule unambiguous (checked again by `Sampler::new`).
+const _: () = assert!(
+    (MAX_REFUSED_SAMPLES as u32 + 1) * MAX_STEP_COUNTS_PER_SAMPLE + CROSS_CHECK_TOLERANCE_COUNTS
+        < COUNTS_PER_TURN / 2
+);
+
+/// Cable lengths at the calibration (home) pose, m: the bench under a 0.14 N downward and 0.12 N
+/// sideways tip force (the recorded trajectory's first tick). A single-turn sensor behind a gearhead
+/// knows its turn only from a known pose: the spools' zero offsets are the sensors' angles here. At
+/// power-up the sampler checks each angle against home and the stepper (which starts at home): a
+/// cable more than one full step away, up to half a sensor turn (1.96 mm) either way, is the fault
+/// `PowerUpOffHome` until re-homed (README.md, "Faults").
 pub const HOME_LENGTHS_M: [f64; 3] = [0.389_941, 0.377_469, 0.384_198];
 
-/// The three spools, calibrated at the home pose. The home counts sit near a sensor turn boundary
-/// for cable 0, and cable 1 reels in with increasing counts.
+/// The spools' zero offsets: each sensor's multi-turn count at the home pose. They sit near a
+/// sensor turn boundary for cable 0, and away from zero for the others.
+pub const ZERO_OFFSET_COUNTS: [i64; 3] = [16_380, 5 * 16_384 + 8_000, -3 * 16_384 + 100];
+
+/// The three spools, calibrated at the home pose ([`ZERO_OFFSET_COUNTS`]); cable 1 reels in with
+/// increasing counts.
 pub fn spools<T: Scalar>() -> [SpoolCalibration<T>; 3] {
     let [l0, l1, l2] = HOME_LENGTHS_M;
+    let [z0, z1, z2] = ZERO_OFFSET_COUNTS;
     let spool = |zero_offset_counts, length_at_zero_m, direction| SpoolCalibration {
         radius_m: T::lit(SPOOL_RADIUS_M),
         counts_per_spool_turn: T::lit(f64::from(GEAR_RATIO * COUNTS_PER_TURN)),
@@ -104,9 +169,9 @@ pub fn spools<T: Scalar>() -> [SpoolCalibration<T>; 3] {
         direction,
     };
     [
-        spool(16_380, l0, Direction::PayOutWithCounts),
-        spool(5 * 16_384 + 8_000, l1, Direction::ReelInWithCounts),
-        spool(-3 * 16_384 + 100, l2, Direction::PayOutWithCounts),
+        spool(z0, l0, Direction::PayOutWithCounts),
+        spool(z1, l1, Direction::ReelInWithCounts),
+        spool(z2, l2, Direction::PayOutWithCounts),
     ]
 }
 
@@ -185,12 +250,37 @@ pub const SCAN_REACH: f32 = 16.0;
 /// steps, so 19 M instructions, within the 20 M the loop allows a restart).
 pub const COLD_SWEEPS: u16 = 110;
 
+/// The steppers' microsteps in sensor counts.
+pub const STEPPER_SCALE: Result<StepperScale, ScaleError> =
+    StepperScale::new(COUNTS_PER_TURN, MICROSTEPS_PER_TURN);
+
+/// The sampler's cross-check settings.
+pub fn sampler_settings() -> SamplerSettings {
+    SamplerSettings {
+        tolerance_counts: CROSS_CHECK_TOLERANCE_COUNTS,
+        still_counts: STILL_COUNTS,
+        persist_samples: PERSIST_SAMPLES,
+        max_refused_samples: MAX_REFUSED_SAMPLES,
+        max_step_counts_per_sample: MAX_STEP_COUNTS_PER_SAMPLE,
+    }
+}
+
+/// The sampler over three angle sensors (cables 0, 1, 2), calibrated by [`spools`], cross-checked
+/// with [`sampler_settings`] against steppers of [`STEPPER_SCALE`].
+///
+/// # Errors
+/// [`SamplerError`] if the sensors or the settings do not suit the sampler.
+pub fn sampler<S: AngleSensor>(sensors: [S; 3]) -> Result<Sampler<S>, SamplerError> {
+    let scale = STEPPER_SCALE.map_err(SamplerError::Stepper)?;
+    Sampler::new(sensors, spools::<f32>(), scale, sampler_settings())
+}
+
 /// The loop's settings: measurement noise from the encoder resolution and the model's own error,
 /// five sweeps per tick, backbone points at the quarters of the rod.
 pub fn loop_config() -> LoopConfig {
     let quarter = ROD_LENGTH_M as f32 / SHAPE_POINTS as f32;
     LoopConfig {
-        tick_period_s: TICK_PERIOD_S,
+        sample_period_s: SAMPLE_PERIOD_S,
         max_cable_speed_m_per_s: MAX_CABLE_SPEED_M_PER_S,
         step_margin_m: STEP_MARGIN_M,
         estimator: EstimatorSettings {

@@ -1,18 +1,22 @@
-//! The estimator loop: one [`EstimatorLoop::tick`] per control period.
+//! The estimator loop: one [`EstimatorLoop::tick`] per control period, on the sampler's latest
+//! [`Sample`].
 //!
 //! Readings -> validation -> warm-started f32 [`Estimator::update`] (a cold estimate on the first
-//! good tick) -> tip force, tip pose and a few backbone points (from the solve's own sweeps). A
-//! refused reading, an input error or a solve that did not converge leaves the last good estimate in
-//! place and says why; after [`LoopConfig::restart_after`] failed solves in a row the next tick
-//! starts cold again (a warm start that lost the answer does not find it by itself). Nothing here
-//! panics.
+//! good tick) -> tip force, tip pose and a few backbone points (from the solve's own sweeps). An
+//! estimate is published ([`Status::Fresh`]) only when the solve converged and the cables determine
+//! the load (`Determined` or `Weak`); anything else leaves the last good estimate in place and says
+//! why: a refused reading (the sampler's refusal or latched fault included), a solve that did not
+//! converge, data no load explains ([`Status::Inconsistent`], [`Status::SlackCable`]) or a load the
+//! cables do not determine ([`Status::Indeterminate`]). After [`LoopConfig::restart_after`] failed
+//! solves in a row the next tick starts cold again (a warm start that lost the answer does not find
+//! it by itself). Nothing here panics.
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
 use model_core::shape::check_queries;
 use model_core::{Attitude, Model, ModelError, ShapePoint, Termination};
 use nalgebra::Vector3;
 
-use crate::encoder::CableLengthSource;
+use crate::sampler::Sample;
 use crate::validate::{CABLES, ReadingValidator, Rejection};
 
 /// Backbone points reported each tick.
@@ -24,9 +28,9 @@ const _: () = assert!(SHAPE_POINTS <= model_core::shape::MAX_SHAPE_POINTS);
 /// How the loop runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LoopConfig {
-    /// Control period, s.
-    pub tick_period_s: f32,
-    /// Fastest the drives can move a cable, m/s: a reading that moved further in the elapsed ticks
+    /// The sampler's period, s: the loop measures time in samples ([`Sample::seq`]).
+    pub sample_period_s: f32,
+    /// Fastest the drives can move a cable, m/s: a reading that moved further in the elapsed time
     /// is refused.
     pub max_cable_speed_m_per_s: f32,
     /// Added to the speed limit for quantisation and noise, m.
@@ -74,18 +78,41 @@ pub struct TickRecord {
     pub determination: Determination,
 }
 
-/// What happened in a tick.
+/// What happened in a tick. Only [`Status::Fresh`] publishes an estimate.
 #[derive(Clone, Copy, Debug, PartialEq, defmt::Format)]
 pub enum Status<E> {
-    /// A new estimate was made from this tick's readings.
+    /// A new estimate was made from this tick's readings: converged, and the cables determine the
+    /// load (`Determined` or `Weak`; the record says which).
     Fresh,
-    /// A reading was refused; the readings were not used.
+    /// A reading was refused; the readings were not used. A sampler fault (`E` =
+    /// [`crate::sampler::SampleError`]) is named here every tick until the sampler is re-homed.
     Rejected(Rejection<E>),
     /// The solve did not converge (or converged to an unstable equilibrium) within its budget; the
     /// next tick carries on from where it stopped.
     NotConverged(Termination),
     /// The model refused the input or the settings.
     Refused(ModelError),
+    /// The solve ended (converged or stalled) with no load of the model explaining the lengths
+    /// within three standard deviations (model-core's `Inconsistent`), and the misfit is not the
+    /// slack pattern below. Not published.
+    Inconsistent {
+        /// Rms of the cable misfits in standard deviations.
+        residual_rms_sigma: f32,
+    },
+    /// As [`Status::Inconsistent`], with every cable measuring longer than the model's path (model
+    /// minus measured below minus three standard deviations on all three): the lengths are longer
+    /// than any shape of the rod makes, which a slack cable does. The misfit is spread over the
+    /// cables almost alike whichever is slack (README.md, "Faults"), so `cable` is the one that
+    /// paid out most since the last fresh estimate. Not published.
+    SlackCable {
+        /// The cable taken to be slack.
+        cable: u8,
+        /// The largest misfit, measured minus model, m.
+        excess_m: f32,
+    },
+    /// The solve converged but the cables do not determine the load (model-core's `Undetermined`,
+    /// or any verdict other than `Determined`, `Weak` and `Inconsistent`). Not published.
+    Indeterminate(Determination),
 }
 
 /// A tick's report: its status and the newest good estimate (this tick's when the status is
@@ -94,22 +121,12 @@ pub enum Status<E> {
 pub struct TickReport<E> {
     /// The tick, counting from 0.
     pub tick: u32,
+    /// The sample the tick used ([`Sample::seq`]).
+    pub sample: u32,
     /// What happened.
     pub status: Status<E>,
     /// The newest good estimate.
     pub estimate: Option<TickRecord>,
-}
-
-/// Reads every source once, in cable order.
-pub fn read_all<S: CableLengthSource>(
-    sources: &mut [S; CABLES],
-) -> [Result<f32, S::Error>; CABLES] {
-    let [a, b, c] = sources;
-    [
-        a.read_cable_length_m(),
-        b.read_cable_length_m(),
-        c.read_cable_length_m(),
-    ]
 }
 
 /// The estimator loop over an f32 model of the three-cable rod, with attitude `A` and room for
@@ -123,6 +140,8 @@ pub struct EstimatorLoop<'m, A: Attitude<f32>, const NODES: usize> {
     last: Option<TickRecord>,
     next_tick: u32,
     failures_in_row: u8,
+    /// The last cold solve found no load explaining the data.
+    cold_misfit: bool,
 }
 
 impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
@@ -131,12 +150,12 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
     /// # Errors
     /// [`ModelError`] for a model without three cables or a non-positive period, speed or margin.
     pub fn new(model: &'m Model<f32, A, NODES>, config: LoopConfig) -> Result<Self, ModelError> {
-        if !(config.tick_period_s.is_finite() && config.tick_period_s > 0.0) {
-            return Err(ModelError::NotPositive("tick period"));
+        if !(config.sample_period_s.is_finite() && config.sample_period_s > 0.0) {
+            return Err(ModelError::NotPositive("sample period"));
         }
         let validator = ReadingValidator::new(
             model,
-            config.max_cable_speed_m_per_s * config.tick_period_s,
+            config.max_cable_speed_m_per_s * config.sample_period_s,
             config.step_margin_m,
         )?;
         // The backbone's arc lengths, checked once here (the solves write the points each tick).
@@ -149,6 +168,7 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
             last: None,
             next_tick: 0,
             failures_in_row: 0,
+            cold_misfit: false,
         })
     }
 
@@ -157,27 +177,38 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
         self.last.as_ref()
     }
 
-    /// One control tick on this tick's readings (one per cable, m, or the source's error).
-    pub fn tick<E: Copy>(&mut self, readings: &[Result<f32, E>; CABLES]) -> TickReport<E> {
+    /// One control tick on the sampler's latest sample (one length per cable, m, or why not).
+    pub fn tick<E: Copy>(&mut self, sample: &Sample<E>) -> TickReport<E> {
         let tick = self.next_tick;
         self.next_tick = self.next_tick.wrapping_add(1);
-        let status = match self.validator.check(tick, readings) {
+        let status = match self.validator.check(sample.seq, &sample.readings) {
             Err(rejection) => Status::Rejected(rejection),
             Ok(lengths_m) => {
-                self.validator.accept(tick, lengths_m);
+                self.validator.accept(sample.seq, lengths_m);
                 self.estimate(tick, &lengths_m)
             }
         };
         TickReport {
             tick,
+            sample: sample.seq,
             status,
             estimate: self.last,
         }
     }
 
+    /// Starts over after the sampler was re-homed: the next good tick is a cold estimate and its
+    /// readings are not jump-checked against the ones before. The last good estimate is kept (its
+    /// tick says how old it is).
+    pub fn restart(&mut self) {
+        self.estimator = None;
+        self.validator.forget();
+        self.failures_in_row = 0;
+        self.cold_misfit = false;
+    }
+
     fn estimate<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> Status<E> {
-        let status = self.solve(tick, lengths_m);
-        if matches!(status, Status::Fresh) {
+        let (status, solved) = self.solve(tick, lengths_m);
+        if solved {
             self.failures_in_row = 0;
         } else {
             self.failures_in_row = self.failures_in_row.saturating_add(1);
@@ -189,7 +220,8 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
         status
     }
 
-    fn solve<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> Status<E> {
+    /// The tick's status, and whether the solve finished (a failed one counts toward a restart).
+    fn solve<E>(&mut self, tick: u32, lengths_m: &[f32; CABLES]) -> (Status<E>, bool) {
         let is_cold = self.estimator.is_none();
         // The backbone comes from the solve's own sweeps (no sweep more).
         let mut points = [ShapePoint::default(); SHAPE_POINTS];
@@ -210,20 +242,70 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
         };
         let estimate = match result {
             Ok(estimate) => estimate,
-            Err(error) => return Status::Refused(error),
+            Err(error) => return (Status::Refused(error), false),
         };
-        let converged = estimate.report.termination.is_success();
+        let termination = estimate.report.termination;
+        let converged = termination.is_success();
         // A one-sweep update always stops at its step (`IterationLimit`); that step is its answer.
         let one_step = !is_cold
             && self.config.estimator.max_sweeps == 1
-            && estimate.report.termination == Termination::IterationLimit;
-        if !(converged || one_step) {
-            return Status::NotConverged(estimate.report.termination);
+            && termination == Termination::IterationLimit;
+        let finished = converged || one_step;
+        // A stall (no step reduces the misfit) says the data fit no load only when a cold solve
+        // reached it, or a warm one on data a cold solve already found so: a warm update that lost
+        // track stalls with a large misfit on good data too.
+        let stall_judges = termination == Termination::Stalled && (is_cold || self.cold_misfit);
+        if is_cold {
+            self.cold_misfit = false;
         }
+        // Anything but `Determined` and `Weak` is not published (model-core may add verdicts).
+        match estimate.quality.determination {
+            Determination::Determined | Determination::Weak if finished => {}
+            Determination::Inconsistent if finished || stall_judges => {
+                self.cold_misfit |= is_cold;
+                let status = self.misfit(lengths_m, &estimate);
+                return (status, finished);
+            }
+            _ if !finished => return (Status::NotConverged(termination), false),
+            other => return (Status::Indeterminate(other), true),
+        }
+        self.cold_misfit = false;
         self.last = Some(record(
             tick, lengths_m, &estimate, &points, is_cold, converged,
         ));
-        Status::Fresh
+        (Status::Fresh, true)
+    }
+
+    /// The status of an estimate no load explains: [`Status::SlackCable`] when every cable measures
+    /// longer than the model's path by more than three standard deviations, else
+    /// [`Status::Inconsistent`].
+    fn misfit<E>(&self, lengths_m: &[f32; CABLES], estimate: &Estimate<f32, 3>) -> Status<E> {
+        let noise_m = 3.0 * self.config.estimator.inverse.length_std_m;
+        let (mut excess_m, mut cable) = (f32::NEG_INFINITY, 0u8);
+        let mut all_long = true;
+        for (index, residual) in estimate.cable_residual_m.iter().take(CABLES).enumerate() {
+            all_long &= *residual < -noise_m;
+            if -residual > excess_m {
+                (excess_m, cable) = (-residual, index as u8);
+            }
+        }
+        if !all_long {
+            return Status::Inconsistent {
+                residual_rms_sigma: estimate.quality.residual_rms_sigma,
+            };
+        }
+        // The cable that paid out most since the last fresh estimate (with no history, the one
+        // with the largest misfit).
+        if let Some(last) = &self.last {
+            let mut most = f32::NEG_INFINITY;
+            for (index, (now, then)) in lengths_m.iter().zip(last.cable_length_m).enumerate() {
+                if now - then > most {
+                    most = now - then;
+                    cable = index as u8;
+                }
+            }
+        }
+        Status::SlackCable { cable, excess_m }
     }
 }
 

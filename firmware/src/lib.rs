@@ -1,11 +1,14 @@
 //! Firmware of the continuum robot's shape estimator (STM32F405, Cortex-M4F).
 //!
 //! The library is target-agnostic `no_std` and host-tested; the images in `src/bin/` add the
-//! runtime (cortex-m-rt, semihosting or defmt) through [`target`], which exists only on the MCU.
+//! runtime (cortex-m-rt or RTIC, semihosting or defmt) through [`target`], which exists only on the
+//! MCU.
 //!
 //! | concern | module |
 //! | --- | --- |
-//! | cable length sources, AS5047P driver, multi-turn tracking | [`encoder`] |
+//! | angle sensors, AS5047P driver, turn placement | [`encoder`] |
+//! | the 1 kHz sampler: turn tracking, stepper cross-check, named cable faults | [`sampler`] |
+//! | stepper microsteps <-> sensor counts | [`stepper`] |
 //! | spool calibration (counts <-> metres) | [`spool`] |
 //! | reading validation (typed rejections) | [`validate`] |
 //! | the estimator loop and its output records | [`control`] |
@@ -22,8 +25,13 @@ pub mod config;
 pub mod control;
 pub mod encoder;
 pub mod fixture;
+pub mod sampler;
 pub mod spool;
+pub mod stepper;
 pub mod validate;
+
+#[cfg(test)]
+mod scenarios;
 
 #[cfg(target_os = "none")]
 pub mod target;

@@ -56,7 +56,8 @@ pub struct SpoolCalibration<T> {
     /// Sensor counts in one spool turn (sensor counts per turn times the gear ratio).
     pub counts_per_spool_turn: T,
     /// Multi-turn position at which the cable is `length_at_zero_m` long, counts. It is also the home
-    /// position: at power-up the spool must be within half a turn of it.
+    /// position, where the steppers start: the sampler checks the first readings after power-up
+    /// against it and names a cable that is not there (`CableFault::PowerUpOffHome`).
     pub zero_offset_counts: i64,
     /// Cable length at `zero_offset_counts`, m.
     pub length_at_zero_m: T,

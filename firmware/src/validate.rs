@@ -1,9 +1,11 @@
 //! Reading validation: a tick's three cable lengths are used only when every one is plausible.
 //!
-//! A reading is refused, with the culprit named, when its source failed, it is not finite, it lies
-//! outside what the model can produce (`(0, cable_length_bound_m]`), or it moved further since the
-//! last accepted reading than the cable can travel in that time (a physical speed limit times the
-//! elapsed ticks, plus a margin for quantisation).
+//! A reading is refused, with the culprit named, when its source failed (the sampler's refusal or
+//! latched fault, [`crate::sampler::SampleError`]), it is not finite, it lies outside what the model
+//! can produce (`(0, cable_length_bound_m]`), or it moved further since the last accepted reading
+//! than the cable can travel in that time (a physical speed limit times the elapsed samples, plus a
+//! margin for quantisation). Time is counted in the sampler's samples, so a tick that comes late
+//! (after a cold estimate) is allowed the travel of the time that really passed.
 
 use model_core::inverse::cable_length_bound_m;
 use model_core::{Attitude, Model, ModelError};
@@ -48,7 +50,7 @@ pub enum Rejection<E> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReadingValidator {
     max_length_m: [f32; CABLES],
-    max_step_per_tick_m: f32,
+    max_step_per_sample_m: f32,
     margin_m: f32,
     last: Option<Accepted>,
 }
@@ -56,12 +58,12 @@ pub struct ReadingValidator {
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Accepted {
     lengths_m: [f32; CABLES],
-    tick: u32,
+    seq: u32,
 }
 
 impl ReadingValidator {
     /// A validator for the three cables of `model` (any f32 model: attitude `A`, `NODES` plan nodes),
-    /// allowing each cable to move `max_step_per_tick_m` per tick plus `margin_m` (quantisation,
+    /// allowing each cable to move `max_step_per_sample_m` per sample plus `margin_m` (quantisation,
     /// noise), both in m.
     ///
     /// # Errors
@@ -69,7 +71,7 @@ impl ReadingValidator {
     /// [`ModelError::NotPositive`] or [`ModelError::NonFinite`] for a bad step or margin.
     pub fn new<A: Attitude<f32>, const NODES: usize>(
         model: &Model<f32, A, NODES>,
-        max_step_per_tick_m: f32,
+        max_step_per_sample_m: f32,
         margin_m: f32,
     ) -> Result<Self, ModelError> {
         let rod = model.rod();
@@ -77,7 +79,7 @@ impl ReadingValidator {
             return Err(ModelError::Mismatch("length sources and model cables"));
         }
         for (value, what) in [
-            (max_step_per_tick_m, "cable step per tick"),
+            (max_step_per_sample_m, "cable step per sample"),
             (margin_m, "cable step margin"),
         ] {
             if !value.is_finite() {
@@ -93,7 +95,7 @@ impl ReadingValidator {
         }
         Ok(Self {
             max_length_m,
-            max_step_per_tick_m,
+            max_step_per_sample_m,
             margin_m,
             last: None,
         })
@@ -104,14 +106,14 @@ impl ReadingValidator {
         self.max_length_m
     }
 
-    /// Checks one tick's readings (tick number `tick`); returns the lengths when all are plausible.
-    /// Nothing is remembered: see [`ReadingValidator::accept`].
+    /// Checks the readings of sample `seq`; returns the lengths when all are plausible. Nothing is
+    /// remembered: see [`ReadingValidator::accept`].
     ///
     /// # Errors
     /// The [`Rejection`] of the first implausible reading.
     pub fn check<E: Copy>(
         &self,
-        tick: u32,
+        seq: u32,
         readings: &[Result<f32, E>; CABLES],
     ) -> Result<[f32; CABLES], Rejection<E>> {
         let mut lengths_m = [0.0f32; CABLES];
@@ -141,9 +143,9 @@ impl ReadingValidator {
             *slot = length_m;
         }
         if let Some(last) = &self.last {
-            // Ticks since the last accepted reading (at least one): the cable could move that much longer.
-            let ticks = tick.wrapping_sub(last.tick).max(1) as f32;
-            let limit_m = self.max_step_per_tick_m * ticks + self.margin_m;
+            // Samples since the last accepted reading (at least one): the cable could move that much.
+            let samples = seq.wrapping_sub(last.seq).max(1) as f32;
+            let limit_m = self.max_step_per_sample_m * samples + self.margin_m;
             for (index, (now, before)) in lengths_m.iter().zip(last.lengths_m).enumerate() {
                 let step_m = now - before;
                 if step_m.abs() > limit_m {
@@ -159,8 +161,13 @@ impl ReadingValidator {
     }
 
     /// Remembers accepted lengths (from [`ReadingValidator::check`]) as the reference for the next jump check.
-    pub fn accept(&mut self, tick: u32, lengths_m: [f32; CABLES]) {
-        self.last = Some(Accepted { lengths_m, tick });
+    pub fn accept(&mut self, seq: u32, lengths_m: [f32; CABLES]) {
+        self.last = Some(Accepted { lengths_m, seq });
+    }
+
+    /// Forgets the last accepted lengths: the next readings are not jump-checked (after a re-home).
+    pub fn forget(&mut self) {
+        self.last = None;
     }
 }
 
@@ -228,10 +235,10 @@ mod tests {
     }
 
     #[test]
-    fn jumps_are_limited_by_speed_times_elapsed_ticks() -> Result<(), ModelError> {
+    fn jumps_are_limited_by_speed_times_elapsed_samples() -> Result<(), ModelError> {
         let mut v = validator()?;
         v.accept(10, GOOD);
-        // 0.6 mm in one tick: limit 0.5 mm + 10 um.
+        // 0.6 mm in one sample: limit 0.5 mm + 10 um.
         let moved = [GOOD[0], GOOD[1] + 6e-4, GOOD[2]];
         match v.check(11, &ok(moved)) {
             Err(Rejection::Jump {
@@ -244,8 +251,12 @@ mod tests {
             }
             other => panic!("expected a jump on cable 1, got {other:?}"),
         }
-        // The same move over two ticks is plausible.
+        // The same move over two samples is plausible.
         assert_eq!(v.check(12, &ok(moved)), Ok(moved));
+        // Forgotten: anything in range goes.
+        v.forget();
+        let far = [GOOD[0] + 0.01, GOOD[1], GOOD[2]];
+        assert_eq!(v.check(13, &ok(far)), Ok(far));
         Ok(())
     }
 
@@ -262,7 +273,7 @@ mod tests {
         let model = BenchModel::new(rod(10)?)?;
         assert_eq!(
             ReadingValidator::new(&model, 0.0, 1e-5),
-            Err(ModelError::NotPositive("cable step per tick"))
+            Err(ModelError::NotPositive("cable step per sample"))
         );
         assert_eq!(
             ReadingValidator::new(&model, 1e-3, f32::NAN),

@@ -3,6 +3,7 @@
 use super::*;
 use crate::config::{loop_config, model};
 use crate::fixture::REFERENCE as TICKS;
+use crate::sampler::Sample;
 
 /// Error type of the scripted readings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -10,6 +11,14 @@ struct Garbled;
 
 fn lengths(tick: usize) -> [Result<f32, Garbled>; 3] {
     TICKS[tick].cable_m.map(|x| Ok(x as f32))
+}
+
+/// The readings as the sampler's sample of loop tick `tick` (ten samples a tick).
+fn at(tick: u32, readings: [Result<f32, Garbled>; 3]) -> Sample<Garbled> {
+    Sample {
+        seq: tick * 10,
+        readings,
+    }
 }
 
 fn tip_error(record: &TickRecord, tick: usize) -> f64 {
@@ -25,7 +34,7 @@ fn good_readings_give_fresh_estimates_within_a_tenth_of_a_millimetre() -> Result
     let model = model()?;
     let mut lp = EstimatorLoop::new(&model, loop_config())?;
     for tick in 0..6 {
-        let out = lp.tick(&lengths(tick));
+        let out = lp.tick(&at(tick as u32, lengths(tick)));
         assert_eq!(out.status, Status::Fresh, "tick {tick}");
         let record = out.estimate.expect("fresh estimate");
         assert_eq!(record.tick as usize, tick);
@@ -44,7 +53,7 @@ fn good_readings_give_fresh_estimates_within_a_tenth_of_a_millimetre() -> Result
 fn bad_readings_are_refused_with_their_reason_and_the_estimate_is_kept() -> Result<(), ModelError> {
     let model = model()?;
     let mut lp = EstimatorLoop::new(&model, loop_config())?;
-    assert_eq!(lp.tick(&lengths(0)).status, Status::Fresh);
+    assert_eq!(lp.tick(&at(0, lengths(0))).status, Status::Fresh);
     let kept = *lp.last_estimate().expect("first estimate");
 
     type Case = ([Result<f32, Garbled>; 3], Status<Garbled>);
@@ -81,17 +90,17 @@ fn bad_readings_are_refused_with_their_reason_and_the_estimate_is_kept() -> Resu
         }),
     ));
 
-    for (readings, expected) in cases {
-        let out = lp.tick(&readings);
+    for (tick, (readings, expected)) in (1..).zip(cases) {
+        let out = lp.tick(&at(tick, readings));
         assert_eq!(out.status, expected);
         assert_eq!(out.estimate, Some(kept), "the last good estimate is kept");
     }
 
-    // A 3 mm jump on cable 1, after four refused ticks: the limit is five ticks of travel (2.5 mm)
-    // plus the margin.
+    // A 3 mm jump on cable 1, after four refused ticks: the limit is five ticks (50 samples) of
+    // travel (2.5 mm) plus the margin.
     let mut jump = good;
     jump[1] = Ok(TICKS[0].cable_m[1] as f32 + 3e-3);
-    let out = lp.tick(&jump);
+    let out = lp.tick(&at(5, jump));
     match out.status {
         Status::Rejected(Rejection::Jump {
             cable: 1,
@@ -106,7 +115,7 @@ fn bad_readings_are_refused_with_their_reason_and_the_estimate_is_kept() -> Resu
     assert_eq!(out.estimate, Some(kept));
 
     // Good readings again: a fresh estimate for this tick.
-    let out = lp.tick(&lengths(1));
+    let out = lp.tick(&at(6, lengths(1)));
     assert_eq!(out.status, Status::Fresh);
     let record = out.estimate.expect("fresh estimate");
     assert_eq!(record.tick, 6);
@@ -125,9 +134,9 @@ fn a_solve_that_cannot_finish_keeps_the_last_estimate_then_restarts_cold() -> Re
     config.estimator.max_sweeps = 2;
     config.max_cable_speed_m_per_s = 10.0;
     let mut lp = EstimatorLoop::new(&model, config)?;
-    assert_eq!(lp.tick(&lengths(0)).status, Status::Fresh);
+    assert_eq!(lp.tick(&at(0, lengths(0))).status, Status::Fresh);
     let kept = *lp.last_estimate().expect("first estimate");
-    let out = lp.tick(&lengths(24));
+    let out = lp.tick(&at(1, lengths(24)));
     // Out of budget, or stalled on the stale Jacobian's step: either way not converged this tick.
     assert!(
         matches!(
@@ -139,7 +148,7 @@ fn a_solve_that_cannot_finish_keeps_the_last_estimate_then_restarts_cold() -> Re
     );
     assert_eq!(out.estimate, Some(kept));
     let mut ticks_to_recover = 1;
-    while lp.tick(&lengths(24)).status != Status::Fresh {
+    while lp.tick(&at(1 + ticks_to_recover, lengths(24))).status != Status::Fresh {
         assert_eq!(lp.last_estimate(), Some(&kept));
         ticks_to_recover += 1;
         assert!(ticks_to_recover <= 20, "no recovery");
@@ -147,8 +156,8 @@ fn a_solve_that_cannot_finish_keeps_the_last_estimate_then_restarts_cold() -> Re
     let record = lp.last_estimate().expect("estimate");
     assert!(tip_error(record, 24) < 1e-4);
     // Recovered by the warm path within the failure limit, or by a cold restart just after it.
-    assert!(ticks_to_recover <= usize::from(config.restart_after) + 1);
-    assert!(record.cold || ticks_to_recover <= usize::from(config.restart_after));
+    assert!(ticks_to_recover <= u32::from(config.restart_after) + 1);
+    assert!(record.cold || ticks_to_recover <= u32::from(config.restart_after));
     Ok(())
 }
 
@@ -156,16 +165,16 @@ fn a_solve_that_cannot_finish_keeps_the_last_estimate_then_restarts_cold() -> Re
 fn invalid_settings_are_refused() -> Result<(), ModelError> {
     let model = model()?;
     let mut config = loop_config();
-    config.tick_period_s = 0.0;
+    config.sample_period_s = 0.0;
     assert_eq!(
         EstimatorLoop::new(&model, config).err(),
-        Some(ModelError::NotPositive("tick period"))
+        Some(ModelError::NotPositive("sample period"))
     );
     // A sweep budget the estimator refuses surfaces on the first tick, as a refusal.
     let mut config = loop_config();
     config.estimator.max_sweeps = 0;
     let mut lp = EstimatorLoop::new(&model, config)?;
-    let out = lp.tick(&lengths(0));
+    let out = lp.tick(&at(0, lengths(0)));
     assert!(
         matches!(out.status, Status::Refused(ModelError::NotPositive(_))),
         "{:?}",

@@ -1,6 +1,14 @@
 //! The real board: STM32F405 at 168 MHz (8 MHz crystal), SPI1 on PA5 (SCK), PA6 (MISO), PA7 (MOSI)
-//! at 4 MHz in mode 1, shared by three AS5047P with chip selects PA4, PB0 and PB1 (cables 0, 1, 2),
-//! a 100 Hz loop timed by the DWT cycle counter, every tick's report over defmt (RTT).
+//! at 4 MHz in mode 1, shared by three AS5047P with chip selects PA4, PB0 and PB1 (cables 0, 1, 2).
+//! The task structure of the estimator image ([`super::tasks`]): the sampler in a SysTick task at
+//! 1 kHz, priority 2 (three sensors of three 16-bit frames each: about 40 us of the millisecond at
+//! 4 MHz), the estimator loop in RTIC's `idle` every 10 ms on the latest sample, each tick's report
+//! and its cycle count over defmt (RTT).
+//!
+//! The steppers' commanded positions come from [`COMMANDED_STEPS`], which the step generator must
+//! advance as it issues steps. The step generator is not in this firmware yet: until it is, the
+//! counts stay at zero, the cross-check takes the motors to hold still at home, and any cable motion
+//! is a named fault (README.md, "Faults").
 //!
 //! Between two frames to one sensor chip select stays high for the bus driver's software path
 //! (well over the sensor's 350 ns minimum at 168 MHz).
@@ -9,19 +17,36 @@
 //! when a debugger is attached (probe-rs prints the backtrace) and resets the MCU otherwise.
 
 use core::cell::RefCell;
+use core::sync::atomic::{AtomicI32, Ordering};
 
-use cortex_m::peripheral::{DCB, DWT, SCB};
-use embedded_hal_bus::spi::{NoDelay, RefCellDevice};
+use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
+use critical_section::Mutex;
+use embedded_hal_bus::spi::{CriticalSectionDevice, NoDelay};
 use stm32f4xx_hal::gpio::{AnyPin, Output};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config;
 use stm32f4xx_hal::spi::Spi;
 
-use crate::config::{MAX_UNWRAP_STEP_COUNTS, TICK_PERIOD_S, loop_config, spools};
-use crate::control::{EstimatorLoop, read_all};
-use crate::encoder::SpoolEncoder;
+use super::tasks;
+use crate::config::{SAMPLE_RATE_HZ, loop_config};
+use crate::control::EstimatorLoop;
+use crate::encoder::AngleSensor;
 use crate::encoder::as5047p::{self, As5047p};
+use crate::sampler::{Sample, SampleError, Sampler};
+
+/// The sensors' shared bus.
+pub type Bus = Spi<pac::SPI1>;
+
+/// One cable's sensor.
+pub type BoardSensor = As5047p<CriticalSectionDevice<'static, Bus, AnyPin<Output>, NoDelay>>;
+
+/// The board's sample.
+pub type BoardSample = Sample<SampleError<<BoardSensor as AngleSensor>::Error>>;
+
+/// The steppers' commanded positions, microsteps since power-up (cables 0, 1, 2): written by the
+/// step generator as it issues steps, read by the sampler every millisecond.
+pub static COMMANDED_STEPS: [AtomicI32; 3] = [const { AtomicI32::new(0) }; 3];
 
 /// Core clock, Hz.
 const SYSCLK_HZ: u32 = 168_000_000;
@@ -54,24 +79,15 @@ pub fn on_hard_fault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
     stop()
 }
 
-/// Sets up the board and runs the loop forever.
-pub fn run() -> ! {
-    let model = crate::config::model();
-    match &model {
-        Ok(model) => run_loop(model),
-        Err(e) => {
-            defmt::error!("model refused: {}", e);
-            stop()
-        }
-    }
-}
-
-#[inline(never)]
-fn run_loop(model: &crate::config::BenchModel) -> ! {
-    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
-        defmt::error!("peripherals already taken");
-        stop()
-    };
+/// The board's `init`: clocks, SPI1 and the three sensors, the sampler, the cycle counter, and
+/// SysTick interrupting at the sampler's rate. Stops (see [`stop`]) if the hardware or the settings
+/// are refused.
+pub fn init(
+    dp: pac::Peripherals,
+    syst: SYST,
+    dcb: &mut DCB,
+    dwt: &mut DWT,
+) -> Sampler<BoardSensor> {
     let mut rcc = dp.RCC.freeze(Config::hse(8.MHz()).sysclk(SYSCLK_HZ.Hz()));
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
@@ -82,42 +98,81 @@ fn run_loop(model: &crate::config::BenchModel) -> ! {
         4.MHz(),
         &mut rcc,
     );
-    let bus = RefCell::new(spi);
+    let Some(bus) = cortex_m::singleton!(: Mutex<RefCell<Bus>> = Mutex::new(RefCell::new(spi)))
+    else {
+        defmt::error!("SPI bus already taken");
+        stop()
+    };
+    let bus: &'static Mutex<RefCell<Bus>> = bus;
     let select: [AnyPin<Output>; 3] = [
         gpioa.pa4.into_push_pull_output().erase(),
         gpiob.pb0.into_push_pull_output().erase(),
         gpiob.pb1.into_push_pull_output().erase(),
     ];
-    let [s0, s1, s2] = spools::<f32>();
     let [c0, c1, c2] = select;
-    let spool = |cs, calibration| {
-        let device = RefCellDevice::new(&bus, cs, NoDelay).ok()?;
-        SpoolEncoder::new(As5047p::new(device), calibration, MAX_UNWRAP_STEP_COUNTS).ok()
+    let sensor = |cs| {
+        CriticalSectionDevice::new(bus, cs, NoDelay)
+            .ok()
+            .map(As5047p::new)
     };
-    let (Some(a), Some(b), Some(c)) = (spool(c0, s0), spool(c1, s1), spool(c2, s2)) else {
+    let (Some(a), Some(b), Some(c)) = (sensor(c0), sensor(c1), sensor(c2)) else {
         defmt::error!("encoder setup refused");
         stop()
     };
-    let mut sources = [a, b, c];
+    let sampler = match crate::config::sampler([a, b, c]) {
+        Ok(sampler) => sampler,
+        Err(e) => {
+            defmt::error!("sampler refused: {}", e);
+            stop()
+        }
+    };
+    dcb.enable_trace();
+    dwt.enable_cycle_counter();
+    tasks::start_sampling(syst, SYSCLK_HZ, SAMPLE_RATE_HZ);
+    sampler
+}
+
+/// The sampler task's body: one sample at the steppers' commanded positions now.
+pub fn sample(sampler: &mut Sampler<BoardSensor>) -> BoardSample {
+    sampler.sample(
+        COMMANDED_STEPS
+            .each_ref()
+            .map(|s| s.load(Ordering::Relaxed)),
+    )
+}
+
+/// The board's `idle`: the estimator loop every 10 ms on the latest sample, forever.
+pub fn idle(latest: &mut dyn FnMut() -> Option<BoardSample>) -> ! {
+    let model = crate::config::model();
+    match &model {
+        Ok(model) => run_loop(model, latest),
+        Err(e) => {
+            defmt::error!("model refused: {}", e);
+            stop()
+        }
+    }
+}
+
+#[inline(never)]
+fn run_loop(
+    model: &crate::config::BenchModel,
+    latest: &mut dyn FnMut() -> Option<BoardSample>,
+) -> ! {
     let Ok(mut estimator) = EstimatorLoop::new(model, loop_config()) else {
         defmt::error!("loop settings refused");
         stop()
     };
-
-    cp.DCB.enable_trace();
-    cp.DWT.enable_cycle_counter();
-    let period = (SYSCLK_HZ as f32 * TICK_PERIOD_S) as u32;
-    let mut next = DWT::cycle_count();
+    let mut due = 0;
     loop {
+        let sample = tasks::wait_for(latest, due);
         let start = DWT::cycle_count();
-        let report = estimator.tick(&read_all(&mut sources));
+        let report = estimator.tick(&sample);
         let cycles = DWT::cycle_count().wrapping_sub(start);
         defmt::info!("{} cycles={=u32}", report, cycles);
-        next = next.wrapping_add(period);
-        if (DWT::cycle_count().wrapping_sub(next) as i32) > 0 {
+        let finished = latest().map_or(sample.seq, |s| s.seq);
+        if finished.wrapping_sub(sample.seq) >= crate::config::SAMPLES_PER_TICK {
             defmt::warn!("tick {} overran its period", report.tick);
-            next = DWT::cycle_count();
         }
-        while (DWT::cycle_count().wrapping_sub(next) as i32) < 0 {}
+        due = tasks::next_due(finished);
     }
 }

@@ -5,8 +5,14 @@ use cortex_m_semihosting::hprintln;
 
 use super::counter::{self, Counter};
 use super::memory;
+use super::stopwatch::Stopwatch;
+use super::tasks;
 use crate::checks::{self, Expected};
+use crate::config::{SAMPLE_RATE_HZ, SAMPLES_PER_TICK};
 use crate::control::Status;
+use crate::encoder::replay::ReplayError;
+use crate::fixture::{JUMP_TICK, RecordedSensor, RecordedSteppers, SENSOR_FAULT_TICK, TICK_COUNT};
+use crate::sampler::{Sample, SampleError, Sampler};
 use crate::validate::Rejection;
 
 fn report_memory() {
@@ -48,15 +54,23 @@ pub fn selftest() -> bool {
     failed == 0 && passed > 0
 }
 
-fn status_name<E>(status: &Status<E>) -> &'static str {
+fn status_name<E>(status: &Status<SampleError<E>>) -> &'static str {
     match status {
         Status::Fresh => "fresh",
-        Status::Rejected(Rejection::Source { .. }) => "rejected:source",
+        Status::Rejected(Rejection::Source { error, .. }) => match error {
+            SampleError::Sensor(_) => "rejected:sensor",
+            SampleError::NotInTurn { .. } => "rejected:not-in-turn",
+            SampleError::Disagrees { .. } => "rejected:disagrees",
+            SampleError::Fault(_) => "rejected:fault",
+        },
         Status::Rejected(Rejection::NonFinite { .. }) => "rejected:non-finite",
         Status::Rejected(Rejection::OutOfRange { .. }) => "rejected:out-of-range",
         Status::Rejected(Rejection::Jump { .. }) => "rejected:jump",
         Status::NotConverged(_) => "not-converged",
         Status::Refused(_) => "refused",
+        Status::Inconsistent { .. } => "inconsistent",
+        Status::SlackCable { .. } => "slack-cable",
+        Status::Indeterminate(_) => "indeterminate",
     }
 }
 
@@ -84,7 +98,7 @@ pub fn e2e() -> bool {
         let expected = match c.expected {
             Expected::Fresh => "",
             Expected::SensorFault => " (injected sensor fault)",
-            Expected::Jump => " (injected jump)",
+            Expected::Jump => " (injected glitch)",
         };
         hprintln!(
             "tick {:2} {:22} estimate@{:2} tip_err_nm {:6} force_err_uN {:5} sweeps {} instructions {:7} {}{}",
@@ -107,11 +121,12 @@ pub fn e2e() -> bool {
         }
     };
     hprintln!(
-        "worst tip error {} nm, worst force error {} uN, most sweeps {}, most instructions per warm tick {}",
+        "worst tip error {} nm, worst force error {} uN, most sweeps {}, most instructions per warm tick {}, per sample {}",
         micro(summary.worst_tip_error_m, 1e9),
         micro(summary.worst_force_error_n, 1e6),
         summary.max_sweeps,
-        summary.max_warm_cost
+        summary.max_warm_cost,
+        summary.max_sample_cost
     );
     report_memory();
     hprintln!("e2e: {} passed, {} failed", summary.passed, summary.failed);
@@ -239,15 +254,58 @@ fn print_load() {
     );
 }
 
-/// The production loop on the recorded trajectory: each tick's report goes out over defmt (RTT:
-/// decoded by `probe-rs run` on a board, unread under QEMU); the memory report and the verdict go
-/// over semihosting. Passes when every tick but the two injected faults gave a fresh estimate.
-pub fn estimator() -> bool {
+/// The estimator image's sample type.
+pub type ReplaySample = Sample<SampleError<ReplayError>>;
+
+/// Core clock under QEMU (netduinoplus2: `cpuclk` 168 MHz), Hz.
+pub const QEMU_CORE_CLOCK_HZ: u32 = 168_000_000;
+
+/// Samples the estimator image holds the bench at home before the recording plays: the cold first
+/// estimate (about 120 ms of QEMU's virtual time) runs while the bench rests, as after power-up.
+pub const ESTIMATOR_HOLD_SAMPLES: u32 = 200;
+
+/// The estimator image's sampler task state: the recording replayed at 1 kHz after
+/// [`ESTIMATOR_HOLD_SAMPLES`] at home, cross-checked against the recorded steppers.
+#[derive(Debug)]
+pub struct Sampling {
+    sampler: Sampler<RecordedSensor>,
+    steppers: RecordedSteppers,
+}
+
+impl Sampling {
+    /// One sample (the sampler task's body).
+    pub fn sample(&mut self) -> ReplaySample {
+        let steps = self.steppers.commanded_steps(self.sampler.next_seq());
+        self.sampler.sample(steps)
+    }
+}
+
+/// The estimator image's `init`: the sampler, and SysTick interrupting at its rate. Exits with
+/// failure if the sampler refuses its settings.
+pub fn estimator_init(syst: cortex_m::peripheral::SYST) -> Sampling {
+    let sensors = [0, 1, 2].map(|c| RecordedSensor::new(c, ESTIMATOR_HOLD_SAMPLES));
+    let Ok(sampler) = crate::config::sampler(sensors) else {
+        crate::hostln!("estimator: sampler settings refused");
+        super::exit(false)
+    };
+    tasks::start_sampling(syst, QEMU_CORE_CLOCK_HZ, SAMPLE_RATE_HZ);
+    Sampling {
+        sampler,
+        steppers: RecordedSteppers::new(ESTIMATOR_HOLD_SAMPLES),
+    }
+}
+
+/// The estimator image's `idle`: the production loop on the latest sample every 10 ms, each
+/// tick's report over defmt (RTT: decoded by `probe-rs run` on a board, unread under QEMU); the
+/// timing of the cold first estimate, the memory report and the verdict over semihosting. Passes
+/// when the sampler ran at 1 kHz of virtual time throughout the cold estimate, and every tick but
+/// the two injected faults (named as injected) gave a fresh estimate.
+pub fn estimator_idle(latest: &mut dyn FnMut() -> Option<ReplaySample>) -> bool {
     // The model stays where `config::model` wrote it (borrowed, not moved out of the `Result`), and
     // the loop runs in its own frame: the plan's construction and the solves never share the stack.
     let model = crate::config::model();
     match &model {
-        Ok(model) => run_estimator(model),
+        Ok(model) => run_estimator(model, latest),
         Err(e) => {
             defmt::error!("model refused: {}", e);
             crate::hostln!("model refused (the reason is in the defmt log)");
@@ -257,42 +315,67 @@ pub fn estimator() -> bool {
 }
 
 #[inline(never)]
-fn run_estimator(model: &crate::config::BenchModel) -> bool {
-    use crate::config::{MAX_UNWRAP_STEP_COUNTS, loop_config, spools};
-    use crate::control::{EstimatorLoop, read_all};
-    use crate::encoder::SpoolEncoder;
-    use crate::fixture::{RecordedSensor, TICK_COUNT};
+fn run_estimator(
+    model: &crate::config::BenchModel,
+    latest: &mut dyn FnMut() -> Option<ReplaySample>,
+) -> bool {
+    use crate::config::loop_config;
+    use crate::control::EstimatorLoop;
 
     let Ok(mut estimator) = EstimatorLoop::new(model, loop_config()) else {
         crate::hostln!("loop settings refused");
         return false;
     };
-    let [s0, s1, s2] = spools::<f32>();
-    let spool = |cable, calibration| {
-        SpoolEncoder::new(
-            RecordedSensor::new(cable),
-            calibration,
-            MAX_UNWRAP_STEP_COUNTS,
-        )
-    };
-    let (Ok(a), Ok(b), Ok(c)) = (spool(0, s0), spool(1, s1), spool(2, s2)) else {
-        crate::hostln!("spool calibration refused");
-        return false;
-    };
-    let mut sources = [a, b, c];
-    let mut fresh = 0usize;
-    for _ in 0..TICK_COUNT {
-        let report = estimator.tick(&read_all(&mut sources));
+    let stopwatch = Stopwatch::start();
+    // The recording's last tick is at this sample; its injected faults at these.
+    let end = ESTIMATOR_HOLD_SAMPLES + (TICK_COUNT as u32 - 1) * SAMPLES_PER_TICK;
+    let at = |tick: usize| ESTIMATOR_HOLD_SAMPLES + tick as u32 * SAMPLES_PER_TICK;
+    let (mut ticks, mut fresh, mut injected) = (0u32, 0u32, 0u32);
+    // The first tick's virtual time (us) and the samples taken meanwhile.
+    let mut cold = None;
+    let mut due = 0;
+    loop {
+        let sample = tasks::wait_for(latest, due);
+        let started = stopwatch.micros();
+        let report = estimator.tick(&sample);
+        let finished_at = latest().map_or(sample.seq, |s| s.seq);
+        let took_us = stopwatch.micros().wrapping_sub(started);
+        cold.get_or_insert((took_us, finished_at.wrapping_sub(sample.seq)));
         defmt::info!("{}", report);
-        if report.status == Status::Fresh {
-            fresh += 1;
+        ticks += 1;
+        match report.status {
+            Status::Fresh => fresh += 1,
+            Status::Rejected(Rejection::Source {
+                cable: 1,
+                error: SampleError::Sensor(ReplayError::Injected),
+            }) if sample.seq == at(SENSOR_FAULT_TICK) => injected += 1,
+            Status::Rejected(Rejection::Source {
+                cable: 2,
+                error: SampleError::Disagrees { .. },
+            }) if sample.seq == at(JUMP_TICK) => injected += 1,
+            _ => crate::hostln!("tick {} at sample {}: not fresh", report.tick, sample.seq),
         }
+        if sample.seq >= end {
+            break;
+        }
+        due = tasks::next_due(finished_at);
     }
+    let (cold_us, cold_samples) = cold.unwrap_or((0, 0));
+    // At 1 kHz: one sample per 1000 us of virtual time, give or take the one in progress.
+    let expected = cold_us / 1000;
+    let sampled = cold_samples + 1 >= expected && cold_samples <= expected + 1 && expected > 20;
+    crate::hostln!(
+        "estimator: sampling during the cold estimate: {} samples in {} us of virtual time ({})",
+        cold_samples,
+        cold_us,
+        if sampled { "1 kHz" } else { "SLOW" }
+    );
     report_memory();
     crate::hostln!(
-        "estimator: {} fresh estimates in {} ticks",
+        "estimator: {} ticks, {} fresh, {} injected faults refused",
+        ticks,
         fresh,
-        TICK_COUNT
+        injected
     );
-    fresh + 2 == TICK_COUNT
+    sampled && injected == 2 && fresh + 2 == ticks
 }

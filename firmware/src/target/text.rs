@@ -28,7 +28,30 @@ impl ufmt::uWrite for HostOut {
     }
 }
 
-/// `hprintln!` through `ufmt`: `{}`, `{:?}` and `{:#010x}`-style hex, no floats.
+/// A `u32` printed as `0x` and eight hex digits through `ufmt`'s `{}`: a tenth of the flash of
+/// `ufmt`'s own `{:#010x}` (508 B), which only the fault handler used.
+#[derive(Clone, Copy, Debug)]
+pub struct Hex(pub u32);
+
+impl ufmt::uDisplay for Hex {
+    fn fmt<W: ufmt::uWrite + ?Sized>(
+        &self,
+        f: &mut ufmt::Formatter<'_, W>,
+    ) -> Result<(), W::Error> {
+        let mut text = *b"0x00000000";
+        for (index, digit) in text.iter_mut().skip(2).enumerate() {
+            let nibble = (self.0 >> (28 - 4 * index)) & 0xF;
+            *digit = match nibble {
+                0..=9 => b'0' + nibble as u8,
+                _ => b'a' + (nibble as u8 - 10),
+            };
+        }
+        // SAFETY: every byte is ASCII ("0x" and hex digits), so valid UTF-8.
+        f.write_str(unsafe { core::str::from_utf8_unchecked(&text) })
+    }
+}
+
+/// `hprintln!` through `ufmt`: `{}` and `{:?}` ([`Hex`] for hexadecimal), no floats.
 #[macro_export]
 macro_rules! hostln {
     ($($arg:tt)*) => {{

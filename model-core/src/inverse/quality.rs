@@ -146,20 +146,13 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
             None => covariance,
         };
         quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
-        let force_cov = self.basis.force_n * covariance * self.basis.force_n.transpose();
-        quality.force_std_n = force_cov.diagonal().map(|v| v.max(T::zero()).sqrt());
+        quality.force_std_n = deviations(&self.basis.force_n, &covariance, T::zero());
         // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
         let d_tip = lin.d_tip_p - lin.d_tip_u * red.a;
-        let tip_cov = d_tip * covariance * d_tip.transpose();
         let model_tip = self.model_tip_std_m * self.model_tip_std_m;
-        quality.tip_std_m = tip_cov
-            .diagonal()
-            .map(|v| (v.max(T::zero()) + model_tip).sqrt());
-        let moment_cov = self.basis.moment_nm * covariance * self.basis.moment_nm.transpose();
-        let worst = quality
-            .force_std_n
-            .max()
-            .max(moment_cov.diagonal().max().max(T::zero()).sqrt());
+        quality.tip_std_m = deviations(&d_tip, &covariance, model_tip);
+        let moment_std = deviations(&self.basis.moment_nm, &covariance, T::zero());
+        let worst = quality.force_std_n.max().max(moment_std.max());
         quality.determination = if residual_rms_sigma > T::lit(3.0) {
             Determination::Inconsistent
         } else if data.rank_deficient {
@@ -226,4 +219,19 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
             covariance,
         })
     }
+}
+
+/// The standard deviations of `a p` for parameters of covariance `c`, each with `extra` added to its
+/// variance: the square roots of the diagonal of `a c a^T` (the diagonal alone).
+// Out of line: one copy for the force, the moment and the tip.
+#[inline(never)]
+fn deviations<T: Scalar, const P: usize>(
+    a: &SMatrix<T, 3, P>,
+    c: &SMatrix<T, P, P>,
+    extra: T,
+) -> Vector3<T> {
+    (a * c)
+        .component_mul(a)
+        .column_sum()
+        .map(|v| (v.max(T::zero()) + extra).sqrt())
 }

@@ -783,11 +783,10 @@ where
     #[inline(never)]
     fn weakest_direction(&self, lin: &Linearization<T, P>) -> Option<SVector<T, P>> {
         let red = self.reduce(lin)?;
-        let information = red.g.tr_mul(&red.g);
-        let cholesky = information.cholesky()?;
+        let covariance = Params::covariance(&red.g, &SVector::zeros())?;
         let mut v = SVector::<T, P>::repeat(T::one()).normalize();
         for _ in 0..WEAKEST_ITERATIONS {
-            let next = cholesky.solve(&v);
+            let next = covariance * v;
             let norm = next.norm();
             if !(norm.is_finite() && norm > T::zero()) {
                 return None;

@@ -108,6 +108,9 @@ pub(crate) struct Failed {
 }
 
 /// Solves `ode` (at its full load) from `start` (`None`: cold).
+// Out of line: the load continuation's locals stay out of the callers' frames (the controller's
+// cold inverse starts with a forward solve and then needs its stack for the inverse).
+#[inline(never)]
 pub(crate) fn solve<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: Option<SVector<T, K>>,

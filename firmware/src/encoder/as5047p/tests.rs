@@ -74,15 +74,15 @@ fn wraps_through_a_full_turn_of_reads() {
             ])
         })
         .collect();
-    let sensor = As5047p::new(Mock::new(&expectations));
-    let mut spool = crate::encoder::multiturn::MultiTurn::new(COUNTS_PER_TURN, 4000, 16_380)
-        .expect("valid tracker");
-    let mut sensor = sensor;
-    let positions: Vec<i64> = angles
+    let mut sensor = As5047p::new(Mock::new(&expectations));
+    let mut position = 16_380;
+    let positions: Vec<i32> = angles
         .iter()
         .map(|_| {
             let raw = sensor.read_angle_counts().expect("good frames");
-            spool.update(raw).expect("small steps")
+            position = crate::encoder::multiturn::nearest(position, raw, COUNTS_PER_TURN)
+                .expect("within a turn");
+            position
         })
         .collect();
     assert_eq!(positions, vec![16_380, 16_383, 16_386, 16_424]);
