@@ -18,7 +18,7 @@ use model_core::inverse::{
 };
 use model_core::{
     Attitude, Equilibrium, GuideMass, Model, ModelError, Rod, Scalar, Section, ShapePoint,
-    ShootingSettings, Stability, Start, TipLoad,
+    ShootingSettings, Stability, Start, Termination, TipLoad,
 };
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -96,8 +96,20 @@ fn verify<T: Scalar, A: Attitude<T>>(
     model: &Model<T, A>,
     eq: &Equilibrium<T>,
 ) -> Result<bool, String> {
+    let phase = eq.report.phase_per_step_rad.to_f64();
+    let resolved = phase <= model_core::MAX_PHASE_PER_STEP_RAD;
+    if eq.report.termination == Termination::UnderResolved
+        && (resolved || eq.report.stability != Stability::Unchecked)
+    {
+        return Err(format!("refused as under-resolved at {phase} rad per step"));
+    }
     if !eq.report.termination.is_success() {
         return Ok(false);
+    }
+    if !resolved {
+        return Err(format!(
+            "a success at {phase} rad of bending phase per step"
+        ));
     }
     let finite = eq.tip_position_m.iter().all(|x| x.is_finite())
         && eq.tip_rotation.iter().all(|x| x.is_finite())
@@ -300,13 +312,19 @@ proptest! {
     /// 1 to 10^4 steps per section on the thesis bench under up to 83.2 g at most 120 degrees from
     /// the tangent: the cold solve is verified and within 0.3 mm of a 2000-step reference (1 to 4
     /// steps give six one-step intervals), within 0.05 mm from 5 steps and 1 um from 40; f32 on the
-    /// same grid within 0.1 mm of f64.
+    /// same grid within 0.1 mm of f64. Where a step takes more than `MAX_PHASE_PER_STEP_RAD` of
+    /// bending phase (1 to 4 steps from about 40 g) the solve refuses as `UnderResolved` instead;
+    /// from 5 steps it must answer.
     #[test]
     fn one_to_ten_thousand_steps(log_steps in 0.0f64..4.0, kg in 0.0f64..0.0832, polar in 0.0f64..(2.0 * PI / 3.0), azimuth in 0.0f64..TAU) {
         let steps = 10f64.powf(log_steps).round() as u16;
         let force = direction(polar, azimuth) * kg * G;
         let model = exp2::<f64>(steps);
         let eq = cold(&model, &TipLoad::force(force));
+        if steps < 5 && eq.report.termination == Termination::UnderResolved {
+            prop_assert_eq!(verify(&model, &eq), Ok(false));
+            return Ok(());
+        }
         prop_assert_eq!(verify(&model, &eq), Ok(true), "{} steps: {:?}", steps, eq.report);
         let reference = cold(&exp2::<f64>(2000), &TipLoad::force(force));
         prop_assert_eq!(verify(&exp2::<f64>(2000), &reference), Ok(true));
@@ -315,9 +333,13 @@ proptest! {
         prop_assert!(err < limit, "{} steps: tip error {:e} m", steps, err);
         let m32 = exp2::<f32>(steps);
         let e32 = cold(&m32, &TipLoad::force(lit(&force)));
-        prop_assert_eq!(verify(&m32, &e32), Ok(true), "f32 {} steps: {:?}", steps, e32.report);
-        let gap = (f64s(&e32.tip_position_m) - eq.tip_position_m).norm();
-        prop_assert!(gap < 1e-4, "f32 {} steps: {:e} m from f64", steps, gap);
+        // At the limit f32's phase may round to the other side of it.
+        let at_limit = eq.report.phase_per_step_rad > 0.99 * model_core::MAX_PHASE_PER_STEP_RAD;
+        if !(at_limit && e32.report.termination == Termination::UnderResolved) {
+            prop_assert_eq!(verify(&m32, &e32), Ok(true), "f32 {} steps: {:?}", steps, e32.report);
+            let gap = (f64s(&e32.tip_position_m) - eq.tip_position_m).norm();
+            prop_assert!(gap < 1e-4, "f32 {} steps: {:e} m from f64", steps, gap);
+        }
     }
 
     /// f32 (the MCU) against f64 under tip forces up to 200 g in any direction within 120 degrees of

@@ -9,7 +9,9 @@
 //! converge, data no load explains ([`Status::Inconsistent`], [`Status::SlackCable`]) or a load the
 //! cables do not determine ([`Status::Indeterminate`]). After [`LoopConfig::restart_after`] failed
 //! solves in a row the next tick starts cold again (a warm start that lost the answer does not find
-//! it by itself). Nothing here panics.
+//! it by itself); an estimate another answer may explain as well (`Ambiguous`, or `Unverified`
+//! when the cold search for other answers ran out of budget) counts as failed, since the warm
+//! updates after it inherit the doubt and only a cold start looks again. Nothing here panics.
 
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
 use model_core::shape::check_queries;
@@ -267,6 +269,12 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
                 return (status, finished);
             }
             _ if !finished => return (Status::NotConverged(termination), false),
+            // Another answer may explain the data as well (or could not be ruled out): the warm
+            // updates that follow inherit the doubt, so the loop counts it toward a cold restart,
+            // which looks again.
+            doubt @ (Determination::Ambiguous | Determination::Unverified) => {
+                return (Status::Indeterminate(doubt), false);
+            }
             other => return (Status::Indeterminate(other), true),
         }
         self.cold_misfit = false;

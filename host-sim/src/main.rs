@@ -17,12 +17,15 @@ mod study;
 const EXIT_STATUS: &str = "\
 Exit status of solve and estimate:
   0  a converged answer (stable, where stability is checked). For estimate, whatever the
-     determination (Determined, Weak, Undetermined, ...): the uncertainty says how good it is.
+     determination (Determined, Weak, Undetermined, Ambiguous: another load explains the
+     lengths as well, Unverified: the search for other loads ran out of budget): the
+     determination and the uncertainty say how good it is.
   1  invalid input: a bad scene file or value (a negative cable length, too many guides, ...),
      or an I/O error
   2  command-line usage error
-  3  no answer: the solve did not converge, converged to an unstable equilibrium, or its frame
-     drifted (any termination other than Converged). The failed iterate is not printed.
+  3  no answer: the solve did not converge, converged to an unstable equilibrium, its frame
+     drifted or its grid does not resolve the bending (any termination other than
+     Converged). The failed iterate is not printed.
   4  estimate only: converged, but no load of the model explains the measurements
      (Inconsistent). The closest fit is printed.
 validate and study exit 1 when a check fails.

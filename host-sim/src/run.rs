@@ -234,6 +234,10 @@ fn failure(report: &SolveReport<f64>) -> String {
         Termination::FrameDrift => "the solve converged, but its frame drifted from a rotation \
              (too few steps for the frame representation; use more steps or the quaternion frame)"
             .to_string(),
+        Termination::UnderResolved => "the solve converged, but the grid's steps are too long for \
+             the bending this load causes (its shape and stability are not resolved; use more steps \
+             per section)"
+            .to_string(),
         other => format!("the solve did not converge ({other:?})"),
     };
     format!("{why}; the failed iterate's shape and numbers are not printed")
@@ -327,6 +331,10 @@ pub struct Report {
     pub residual: f64,
     /// Load-continuation steps.
     pub load_steps: u16,
+    /// The largest bending phase per step on the grid, rad (the limit is
+    /// `model_core::MAX_PHASE_PER_STEP_RAD`).
+    #[serde(serialize_with = "real::one")]
+    pub phase_per_step_rad: f64,
 }
 
 impl From<&model_core::SolveReport<f64>> for Report {
@@ -338,6 +346,7 @@ impl From<&model_core::SolveReport<f64>> for Report {
             sweeps: r.sweeps,
             residual: r.residual,
             load_steps: r.load_steps,
+            phase_per_step_rad: r.phase_per_step_rad,
         }
     }
 }
@@ -648,6 +657,7 @@ mod tests {
             residual: f64::NAN,
             load_steps: 0,
             stability,
+            phase_per_step_rad: 0.1,
         }
     }
 
@@ -716,6 +726,12 @@ mod tests {
             (Termination::Converged, stable, None, Verdict::Answer),
             (Termination::Stalled, stable, None, Verdict::NoAnswer),
             (Termination::FrameDrift, stable, None, Verdict::NoAnswer),
+            (
+                Termination::UnderResolved,
+                Stability::Unchecked,
+                None,
+                Verdict::NoAnswer,
+            ),
             (
                 Termination::Unstable,
                 Stability::ConjugatePoint(0.2),

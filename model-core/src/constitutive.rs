@@ -143,6 +143,12 @@ pub(crate) struct Compliance<T> {
 }
 
 impl<T: Scalar> Compliance<T> {
+    /// `1 / EI` about the section's softer bending axis, 1/(N m^2).
+    #[inline]
+    pub fn max_bending_compliance(&self) -> T {
+        self.c_inv.x.max(self.c_inv.y)
+    }
+
     pub fn new(stiffness: &Stiffness<T>) -> Self {
         let one = Vector3::repeat(T::one());
         Self {

@@ -70,7 +70,7 @@ pub use kinematics::{Attitude, LieGroup, Quaternion, RotationMatrix};
 pub use loads::{NoShapeLoad, NodePose, PointLoad, PoseChange, ShapeLoad, TipLoad, Wrench};
 pub use mass::GuideMass;
 pub use model::Model;
-pub use report::{MAX_FRAME_DRIFT, SolveReport, Termination};
+pub use report::{MAX_FRAME_DRIFT, MAX_PHASE_PER_STEP_RAD, SolveReport, Termination};
 pub use rod::{Cable, Guide, Rod, Section, StrainModel};
 pub use scalar::Scalar;
 pub use shape::ShapePoint;

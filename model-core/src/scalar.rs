@@ -1,6 +1,6 @@
 //! The scalar type the model is generic over: `f32` on the MCU, `f64` on the host.
 
-use nalgebra::RealField;
+use nalgebra::{RealField, SMatrix};
 
 /// A real scalar for the rod model.
 ///
@@ -101,4 +101,14 @@ pub(crate) fn from_columns<T: Scalar, const R: usize, const C: usize>(
         c.copy_from(&column(j));
     }
     m
+}
+
+/// `a b`, nalgebra's product, out of line: one copy per shape of product rather than one per use
+/// (the controller's flash; the call costs a few instructions against the product's tens).
+#[inline(never)]
+pub(crate) fn product<T: Scalar, const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<T, R, K>,
+    b: &SMatrix<T, K, C>,
+) -> SMatrix<T, R, C> {
+    a * b
 }

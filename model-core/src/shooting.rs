@@ -107,6 +107,7 @@ pub(crate) fn equilibrium<T: Scalar, const K: usize>(
                     residual: T::zero(),
                     load_steps: failed.load_steps,
                     stability: Stability::Unchecked,
+                    phase_per_step_rad: T::zero(),
                 },
             };
         }
@@ -133,6 +134,7 @@ pub(crate) fn equilibrium<T: Scalar, const K: usize>(
             residual: outcome.residual,
             load_steps: solved.load_steps,
             stability: solved.stability,
+            phase_per_step_rad: outcome.sweep.phase_per_step_rad,
         },
     }
 }

@@ -3,6 +3,7 @@
 use nalgebra::SVector;
 
 use super::basis::{LoadBasis, ParamCount, Params};
+use super::quality::Determination;
 use super::reduced::{Linearization, Point, Problem};
 use super::{
     CableVector, Estimate, InverseSettings, InverseStart, estimate, validate_measurements,
@@ -13,6 +14,7 @@ use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::plan::MAX_NODES;
 use crate::report::Termination;
+use crate::scalar::product;
 use crate::shape::{MAX_SHAPE_POINTS, Shape, ShapePoint};
 use crate::solve::newton::Work;
 use crate::stability::Stability;
@@ -72,6 +74,11 @@ pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES:
     x: Point<T, P>,
     lin: Linearization<T, P>,
     stability: Stability<T>,
+    /// The first estimate's verdict when it could not rule out other answers
+    /// ([`Determination::Ambiguous`] or [`Determination::Unverified`]): every update inherits it.
+    /// An update follows one branch from the last estimate and does not look for others, so it
+    /// cannot lift the doubt; a new cold start can.
+    doubt: Option<Determination>,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
@@ -141,6 +148,10 @@ where
             },
             lin: Linearization::empty(),
             stability: first.report.stability,
+            doubt: match first.quality.determination {
+                d @ (Determination::Ambiguous | Determination::Unverified) => Some(d),
+                _ => None,
+            },
         };
         let problem = estimator.problem(validate_measurements(model, measured_m)?);
         let sw = problem.sweep(&estimator.x, true, shape.as_mut().map(Shape::sink).as_mut());
@@ -169,6 +180,7 @@ where
     /// last estimate already met the tolerances, [`Termination::IterationLimit`] when it took a step.
     pub fn update(&mut self, measured_m: &[T]) -> Result<Estimate<T, P>, ModelError> {
         self.update_inner(measured_m, None)
+            .map(|out| self.with_doubt(out))
     }
 
     /// [`Estimator::update`], and the backbone of the estimate at the arc lengths `s_m` (increasing,
@@ -184,6 +196,15 @@ where
     ) -> Result<Estimate<T, P>, ModelError> {
         let shape = Shape::new(self.model.length_m(), s_m, out)?;
         self.update_inner(measured_m, Some(shape))
+            .map(|out| self.with_doubt(out))
+    }
+
+    /// An update's estimate with the first estimate's doubt, if any (see [`Estimator`]).
+    fn with_doubt(&self, mut out: Estimate<T, P>) -> Estimate<T, P> {
+        if let Some(doubt) = self.doubt {
+            out.quality.determination = out.quality.determination.at_best(doubt);
+        }
+        out
     }
 
     fn update_inner(
@@ -291,9 +312,9 @@ where
         work.iterations = 1;
         // The state after the step, predicted by the exact linearisation just taken.
         let lin = &mut self.lin;
-        lin.e += lin.j_eu * du + lin.j_ep * dp;
-        lin.rc += lin.j_cu * du + lin.j_cp * dp;
-        lin.tip_position_m += lin.d_tip_u * du + lin.d_tip_p * dp;
+        lin.e += product(&lin.j_eu, &du) + product(&lin.j_ep, &dp);
+        lin.rc += product(&lin.j_cu, &du) + product(&lin.j_cp, &dp);
+        lin.tip_position_m += product(&lin.d_tip_u, &du) + product(&lin.d_tip_p, &dp);
         self.x = Point {
             u0: self.x.u0 + du,
             p: self.x.p + dp,

@@ -8,6 +8,7 @@ use super::basis::{ParamCount, Params};
 use super::reduced::{Linearization, Problem, Reduced, Widen};
 use crate::Scalar;
 use crate::kinematics::Attitude;
+use crate::scalar::product;
 
 /// How well the measurements determine the load.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -148,7 +149,7 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
         quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
         quality.force_std_n = deviations(&self.basis.force_n, &covariance, T::zero());
         // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.
-        let d_tip = lin.d_tip_p - lin.d_tip_u * red.a;
+        let d_tip = lin.d_tip_p - product(&lin.d_tip_u, &red.a);
         let model_tip = self.model_tip_std_m * self.model_tip_std_m;
         quality.tip_std_m = deviations(&d_tip, &covariance, model_tip);
         let moment_std = deviations(&self.basis.moment_nm, &covariance, T::zero());

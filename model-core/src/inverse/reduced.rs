@@ -13,6 +13,7 @@
 //! `|du0| L`. An iterate whose tip-moment residual is too large for the reduced model is brought back
 //! onto the equilibrium at its load by the forward solve's Newton iteration (`solve/newton.rs`).
 
+use crate::scalar::product;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use super::basis::{LoadBasis, ParamCount, Params, prior_weight_for};
@@ -24,6 +25,7 @@ use crate::ode::dead_load::DeadLoadRod;
 use crate::report::{MAX_FRAME_DRIFT, SolveReport, Termination};
 use crate::shape::ShapeSink;
 use crate::solve::newton::{NewtonOptions, Work, newton_in_place};
+use crate::solve::resolved;
 use crate::solve::stopping::{self, default_tolerance};
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet, sweep};
@@ -128,6 +130,7 @@ pub(super) struct Linearization<T, const P: usize> {
     pub(super) d_theta_tip_u: Matrix3<T>,
     pub(super) conjugate_point_m: Option<T>,
     pub(super) frame_drift: T,
+    pub(super) phase_per_step_rad: T,
 }
 
 impl<T: Scalar, const P: usize> Linearization<T, P> {
@@ -146,6 +149,7 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
             d_theta_tip_u: Matrix3::identity(),
             conjugate_point_m: None,
             frame_drift: T::zero(),
+            phase_per_step_rad: T::zero(),
         }
     }
 
@@ -156,6 +160,7 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
         self.tip_position_m = sw.tip_position_m;
         self.tip_rotation = sw.tip_rotation;
         self.frame_drift = sw.frame_drift;
+        self.phase_per_step_rad = sw.phase_per_step_rad;
     }
 }
 
@@ -316,7 +321,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let (u, f) = (Family::Unknown, Family::TipForce);
         let j_ef: Matrix3<T> = sw.residual_block(f);
         // e = C u - R^T tau: d e / d tau = -R^T.
-        let j_ep = j_ef * self.basis.force_n - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
+        let j_ep =
+            product(&j_ef, &self.basis.force_n) - sw.tip_rotation.tr_mul(&self.basis.moment_nm);
         let j_cf: SMatrix<T, MAX_CABLES, 3> = sw.cable_block(f);
         let d_tip_f: Matrix3<T> = sw.position_block(f);
         Linearization {
@@ -325,14 +331,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             j_eu: sw.residual_block(u),
             j_ep,
             j_cu: sw.cable_block(u),
-            j_cp: j_cf * self.basis.force_n,
+            j_cp: product(&j_cf, &self.basis.force_n),
             tip_position_m: sw.tip_position_m,
             tip_rotation: sw.tip_rotation,
             d_tip_u: sw.position_block(u),
-            d_tip_p: d_tip_f * self.basis.force_n,
+            d_tip_p: product(&d_tip_f, &self.basis.force_n),
             d_theta_tip_u: sw.rotation_block(u),
             conjugate_point_m: sw.conjugate_point_m,
             frame_drift: sw.frame_drift,
+            phase_per_step_rad: sw.phase_per_step_rad,
         }
     }
 
@@ -341,8 +348,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let a = lu.solve(&lin.j_ep)?;
         let b = lu.solve(&lin.e)?;
         let inv_std = T::one() / self.length_std_m;
-        let g = (lin.j_cp - lin.j_cu * a) * inv_std;
-        let c = (lin.rc - lin.j_cu * b) * inv_std;
+        let g = (lin.j_cp - product(&lin.j_cu, &a)) * inv_std;
+        let c = (lin.rc - product(&lin.j_cu, &b)) * inv_std;
         let ok = crate::scalar::all_finite(&g)
             && crate::scalar::all_finite(&c)
             && crate::scalar::all_finite(&a);
@@ -440,7 +447,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let length = self.model.length_m();
         let limit = self.settings.max_rotation_step_rad;
         let restore = -red.b;
-        let follow = -(red.a * dp);
+        let follow = -product(&red.a, &dp);
         let (du, dp) = if (restore + follow).norm() * length <= limit {
             (restore + follow, dp)
         } else if restore.norm() * length >= limit {
@@ -484,7 +491,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         let Some((du, dp)) = self.step(red, &x.p, T::zero()) else {
             return (false, infinite);
         };
-        let tip_move = (lin.d_tip_u * du + lin.d_tip_p * dp).norm();
+        let tip_move = (product(&lin.d_tip_u, &du) + product(&lin.d_tip_p, &dp)).norm();
         // The tip-moment condition holds when its residual is small or, at the rounding floor, when
         // the correction it asks for (`J_eu^-1 e`) turns the base negligibly (what it does to the
         // tip is in `tip_move` below, against the tip tolerance).
@@ -1035,6 +1042,9 @@ where
         {
             termination = Termination::FrameDrift;
         }
+        if termination.is_success() && !resolved(lin.phase_per_step_rad) {
+            termination = Termination::UnderResolved;
+        }
         let stability = if termination.is_success() && self.settings.check_stability {
             let verdict = self.stability(&x.p, lin);
             if !verdict.is_acceptable() {
@@ -1065,6 +1075,7 @@ where
                 residual: moment.max(length_residual),
                 load_steps: 0,
                 stability,
+                phase_per_step_rad: lin.phase_per_step_rad,
             },
             quality,
         }

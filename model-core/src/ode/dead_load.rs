@@ -128,6 +128,8 @@ pub(crate) struct Field<'a, T> {
     g_lambda: Vector3<T>,
     s1: T,
     kirchhoff: bool,
+    /// `(1 / EI)^2` about the softer bending axis, for [`super::bending_load`].
+    compliance_squared: T,
 }
 
 /// `a + b` rounded, and the rounding error (Neumaier's two-sum, per component).
@@ -224,14 +226,29 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 3>
     }
 
     #[inline]
+    fn stage_bending_load(&self, f: &Field<'a, T>, stage: &Stage<T>) -> T {
+        super::local_bending_load(&stage.n_local, f.compliance_squared)
+    }
+
+    #[inline]
+    fn bending_load(&self, f: &Field<'a, T>, s: T, p: &Point<T, A>) -> T {
+        let n = f.n_end + f.g_lambda * (f.s1 - s);
+        let tangent = p.att.matrix().column(2).into_owned();
+        super::bending_load(&n, &tangent, f.compliance_squared)
+    }
+
+    #[inline]
     fn field(&self, interval: &Interval<T>) -> Option<Field<'a, T>> {
         let model: &'a Model<T, A, NODES> = self.model;
+        let comp = model.compliance(interval.section)?;
+        let compliance = comp.max_bending_compliance();
         Some(Field {
-            comp: model.compliance(interval.section)?,
+            comp,
             n_end: (self.load.force_n + interval.distal_force_n) * self.alpha,
             g_lambda: model.rod().gravity_m_s2 * (interval.line_density_kg_per_m * self.alpha),
             s1: interval.s1_m,
             kirchhoff: self.kirchhoff,
+            compliance_squared: compliance * compliance,
         })
     }
 

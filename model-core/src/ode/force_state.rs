@@ -200,6 +200,8 @@ pub(crate) struct Field<'a, T> {
     /// Distributed force, N/m, global.
     f: Vector3<T>,
     kirchhoff: bool,
+    /// `(1 / EI)^2` about the softer bending axis, for [`super::bending_load`].
+    compliance_squared: T,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<T, 6>
@@ -298,12 +300,26 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<
         }
     }
 
+    #[inline]
+    fn stage_bending_load(&self, f: &Field<'a, T>, stage: &Stage<T>) -> T {
+        super::local_bending_load(&stage.n_local, f.compliance_squared)
+    }
+
+    #[inline]
+    fn bending_load(&self, f: &Field<'a, T>, _: T, y: &State<T, A>) -> T {
+        let tangent = y.att.matrix().column(2).into_owned();
+        super::bending_load(&y.n, &tangent, f.compliance_squared)
+    }
+
     fn field(&self, interval: &Interval<T>) -> Option<Field<'a, T>> {
         let model: &'a Model<T, A, NODES> = self.model;
+        let comp = model.compliance(interval.section)?;
+        let compliance = comp.max_bending_compliance();
         Some(Field {
-            comp: model.compliance(interval.section)?,
+            comp,
             f: model.rod().gravity_m_s2 * (interval.line_density_kg_per_m * self.alpha),
             kirchhoff: self.kirchhoff,
+            compliance_squared: compliance * compliance,
         })
     }
 

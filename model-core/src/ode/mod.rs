@@ -98,6 +98,11 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn blank_stage(&self) -> Self::Stage;
     /// The coefficients on `interval`; `None` when the scene does not have them (a corrupt plan).
     fn field(&self, interval: &Interval<T>) -> Option<Self::Field>;
+    /// The bending load at `(s, y)`, 1/m^4: [`bending_load`] of the internal force there.
+    fn bending_load(&self, f: &Self::Field, s: T, y: &Self::State) -> T;
+    /// The same from the record of a step's first stage (at the step's start), which has the force
+    /// at hand already.
+    fn stage_bending_load(&self, f: &Self::Field, stage: &Self::Stage) -> T;
 
     /// The rates at `(s, y)`; writes what the tangents need into `record` when asked.
     fn rate(
@@ -207,4 +212,38 @@ pub(crate) fn straight_base_moment<T: Scalar, A: Attitude<T>, const NODES: usize
 #[inline]
 pub(crate) fn unit<T: Scalar, const N: usize>(j: usize) -> SVector<T, N> {
     SVector::from_fn(|i, _| if i == j { T::one() } else { T::zero() })
+}
+
+/// [`bending_load`] of a force `n_local` in the section's own frame (tangent `z`).
+#[inline]
+pub(crate) fn local_bending_load<T: Scalar>(n_local: &Vector3<T>, compliance_squared: T) -> T {
+    bending_load(n_local, &Vector3::z(), compliance_squared)
+}
+
+/// The bending load `(F / EI)^2`, 1/m^4, of the internal force `n` on a section with tangent `t`
+/// (unit) and `compliance_squared` `(1 / EI)^2` about its softer axis: `F` is the force that sets how fast a bend
+/// turns into a deflection and back (`sqrt(F / EI)` radians of bending phase per metre, see
+/// [`crate::report::MAX_PHASE_PER_STEP_RAD`]): the whole force where it compresses the section,
+/// its lateral part where it pulls (a straight rod in tension does not bend). No square root: the
+/// sweep keeps the largest and takes the roots once.
+#[inline]
+pub(crate) fn bending_load<T: Scalar, const D: usize>(
+    n: &SVector<T, D>,
+    t: &SVector<T, D>,
+    compliance_squared: T,
+) -> T {
+    // Comparisons rather than `max`: this runs at every step.
+    let axial = n.dot(t);
+    let pull = if axial > T::zero() {
+        axial * axial
+    } else {
+        T::zero()
+    };
+    let force_squared = n.norm_squared() - pull;
+    let force_squared = if force_squared > T::zero() {
+        force_squared
+    } else {
+        T::zero()
+    };
+    force_squared * compliance_squared
 }

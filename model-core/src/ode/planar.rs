@@ -271,6 +271,17 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
         }
     }
 
+    #[inline]
+    fn stage_bending_load(&self, f: &Field<T>, stage: &Stage<T>) -> T {
+        super::bending_load(&stage.n, &stage.t, T::one() / (f.ei * f.ei))
+    }
+
+    #[inline]
+    fn bending_load(&self, f: &Field<T>, s: T, y: &State<T>) -> T {
+        let n = f.n_end + f.g_lambda * (f.s1 - s);
+        super::bending_load(&n, &y.t, T::one() / (f.ei * f.ei))
+    }
+
     fn field(&self, interval: &Interval<T>) -> Option<Field<T>> {
         let &(ei, ga_inv, ea_inv) = self.sections.get(usize::from(interval.section))?;
         let tip_force = self.project(&self.load.force_n);

@@ -15,7 +15,7 @@ use nalgebra::{Const, DimMin, SMatrix, SVector};
 use crate::Scalar;
 use crate::error::{ModelError, positive};
 use crate::ode::{Family, RodOde};
-use crate::report::{MAX_FRAME_DRIFT, Termination};
+use crate::report::{MAX_FRAME_DRIFT, MAX_PHASE_PER_STEP_RAD, Termination};
 use crate::scalar::from_columns;
 use crate::solve::stopping::default_tolerance;
 use crate::stability::{Stability, classify};
@@ -187,7 +187,7 @@ where
                 }),
             };
     }
-    let Some((mut newton, stability)) = result else {
+    let Some((mut newton, mut stability)) = result else {
         return Err(Failed { work, load_steps });
     };
     if newton.termination.is_success()
@@ -196,10 +196,20 @@ where
     {
         newton.termination = Termination::FrameDrift;
     }
+    if newton.termination.is_success() && !resolved(newton.sweep.phase_per_step_rad) {
+        newton.termination = Termination::UnderResolved;
+        // The grid cannot resolve the test either: no verdict rather than a wrong one.
+        stability = Stability::Unchecked;
+    }
     Ok(Solved {
         newton,
         stability,
         work,
         load_steps,
     })
+}
+
+/// Whether a sweep's grid resolves its bending: at most [`MAX_PHASE_PER_STEP_RAD`] per step.
+pub(crate) fn resolved<T: Scalar>(phase_per_step_rad: T) -> bool {
+    phase_per_step_rad.is_finite() && phase_per_step_rad <= T::lit(MAX_PHASE_PER_STEP_RAD)
 }

@@ -99,6 +99,9 @@ pub(crate) struct Sweep<T, const K: usize> {
     pub conjugate_point_m: Option<T>,
     /// Largest `|R^T R - I|` met at the nodes.
     pub frame_drift: T,
+    /// Largest bending phase per step on the grid, rad (see
+    /// [`crate::report::MAX_PHASE_PER_STEP_RAD`]).
+    pub phase_per_step_rad: T,
     pub finite: bool,
 }
 
@@ -116,6 +119,7 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
             tangents: 0,
             conjugate_point_m: None,
             frame_drift: T::zero(),
+            phase_per_step_rad: T::zero(),
             finite: false,
         }
     }
@@ -147,6 +151,8 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
 
     /// The first `N` tangents of `family` as the columns of a matrix: `column(slot)` for each slot
     /// the sweep carried, zero for the others.
+    // Out of line: one copy per shape rather than one per block read (the controller's flash).
+    #[inline(never)]
     fn block<const R: usize, const N: usize>(
         &self,
         family: Family,
@@ -279,6 +285,8 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
     let mut d_pose = [(Vector3::zeros(), Vector3::zeros()); MAX_TANGENTS];
     let mut conjugate_point_m = None;
     let mut frame_drift = T::zero();
+    // The largest bending phase per step, to the fourth power (no root per step).
+    let mut phase4 = T::zero();
     let mut stages = [ode.blank_stage(); 4];
     let mut track = ode.track();
     let mut proximal: Option<O::Field> = None;
@@ -308,6 +316,8 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
         );
         let (s0, len) = (interval.s0_m, interval.s1_m - interval.s0_m);
         let steps = T::lit(f64::from(interval.steps));
+        let step_m = len / steps;
+        let h4 = (step_m * step_m) * (step_m * step_m);
         let mut s = s0;
         for i in 1..=interval.steps {
             let s_next = if i == interval.steps {
@@ -321,20 +331,32 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
                 next_shape_m = write_shape(ode, &field, s, s_next, &y, sink);
             }
             let h = s_next - s;
-            if tan.is_empty() {
+            // The bending load at the step's start: from the first stage's record when the step
+            // keeps one (it has the force in the section's frame at hand).
+            let load = if tan.is_empty() {
+                let load = ode.bending_load(&field, s, &y);
                 y = rk4::step(ode, &field, s, h, &y, None);
+                load
             } else {
                 y = rk4::step(ode, &field, s, h, &y, Some(&mut stages));
                 rk4::tangent_steps(ode, &field, &stages, seeds, h, tan);
+                ode.stage_bending_load(&field, &stages[0])
+            } * h4;
+            if load > phase4 {
+                phase4 = load;
             }
             ode.after_step(&mut y, tan);
             if which.track_stability
                 && conjugate_point_m.is_none()
-                && ode.crosses(&mut track, &y, tan, &field, len / steps)
+                && ode.crosses(&mut track, &y, tan, &field, step_m)
             {
                 conjugate_point_m = Some(s_next);
             }
             s = s_next;
+        }
+        let load = ode.bending_load(&field, s, &y) * h4;
+        if load > phase4 {
+            phase4 = load;
         }
         if !ode.finite(&y, tan) {
             return out;
@@ -385,6 +407,7 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
     out.tangents = count;
     out.conjugate_point_m = conjugate_point_m;
     out.frame_drift = frame_drift;
+    out.phase_per_step_rad = phase4.sqrt().sqrt();
     out.finite = crate::scalar::all_finite(&out.residual)
         && out.cable_m.iter().all(|x| x.is_finite())
         && out.d_cable.iter().flatten().all(|x| x.is_finite())
