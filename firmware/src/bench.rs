@@ -7,7 +7,12 @@
 //! * `sweep`: one plain forward sweep (`Model::evaluate`),
 //! * `forward_cold`: a cold forward solve (`Model::solve`, `Start::Cold`),
 //! * `inverse_cold`: a cold inverse estimate (`Estimator::new`: a cold forward solve, then
-//!   Gauss-Newton),
+//!   the inverse and its search for other answers),
+//! * `inverse_cold_bad`: the same on readings the validator accepts but no load explains (every
+//!   cable [`BAD_STRETCH_M`] longer),
+//! * `inverse_cold_budget`: the same where the cold estimate's sweep budget
+//!   ([`crate::config::COLD_SWEEPS`]) runs out (cable 1 [`BUDGET_SHORTENING_M`] short): its worst
+//!   case,
 //! * `update_warm`: warm `Estimator::update`s along the recorded trajectory's force path with the
 //!   loop's sweep budget (the costliest of [`WARM_TICKS`] ticks is reported, with the worst tip error
 //!   against a forward solve of the same model),
@@ -27,6 +32,14 @@ pub const STEP_COUNTS: [u16; 5] = [5, 10, 20, 40, 100];
 
 /// Warm updates measured per step count: ticks 1..=WARM_TICKS of the recorded force path.
 pub const WARM_TICKS: usize = 8;
+
+/// How much longer every cable reads in `inverse_cold_bad`, m: a stretch no load of the model
+/// explains (the estimate is `Inconsistent`).
+pub const BAD_STRETCH_M: f32 = 1.0e-4;
+
+/// How much shorter cable 1 reads in `inverse_cold_budget`, m: only a large load explains it, and the
+/// search for other answers runs out of the sweep budget (`Unverified`).
+pub const BUDGET_SHORTENING_M: f32 = 3.16e-3;
 
 /// One measured case.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,6 +96,11 @@ fn lengths(eq: &model_core::Equilibrium<f32>) -> [f32; 3] {
         *dst = *src;
     }
     out
+}
+
+/// Whether a case's estimate must converge (the bad-data cases need not: they measure the cost).
+pub fn must_converge(case: &str) -> bool {
+    !matches!(case, "inverse_cold_bad" | "inverse_cold_budget")
 }
 
 /// Runs every case; `measure` runs a closure and returns its cost, `report` receives each line.
@@ -149,6 +167,35 @@ pub fn run(
             estimate.report.termination.is_success(),
             tip_error,
         ));
+
+        let stretched = measured.map(|l| l + BAD_STRETCH_M);
+        let mut shortened = measured;
+        if let Some(l) = shortened.get_mut(1) {
+            *l -= BUDGET_SHORTENING_M;
+        }
+        for (case, readings) in [
+            ("inverse_cold_bad", stretched),
+            ("inverse_cold_budget", shortened),
+        ] {
+            let mut first = None;
+            let cost = measure(&mut || {
+                first = Some(Estimator::new(
+                    &model,
+                    LoadBasis::tip_force(),
+                    &readings,
+                    Vector3::zeros(),
+                    estimator_settings,
+                ));
+            });
+            let (_, estimate) = first.unwrap_or(Err(ModelError::Empty("measurement")))?;
+            report(&line(
+                case,
+                cost,
+                estimate.report.sweeps,
+                estimate.report.termination.is_success(),
+                0.0,
+            ));
+        }
 
         for (case, max_sweeps) in [
             ("update_warm", estimator_settings.max_sweeps),
@@ -252,9 +299,14 @@ mod tests {
             },
             &mut |l| lines.push(*l),
         )?;
-        assert_eq!(lines.len(), 5 * STEP_COUNTS.len());
+        assert_eq!(lines.len(), 7 * STEP_COUNTS.len());
         for l in &lines {
             println!("{l:?}");
+            if !must_converge(l.case) {
+                // Bounded by the budget (and the last step's sweeps), whatever it found.
+                assert!(l.sweeps <= crate::config::COLD_SWEEPS + 9, "{l:?}");
+                continue;
+            }
             assert!(l.converged, "{l:?}");
             // The warm path tracks the forward solution to well under the 0.1 mm target; the
             // one-sweep update, a linear prediction one tick behind, within it.

@@ -211,7 +211,7 @@ pub fn bench() -> bool {
     let result = crate::bench::run(
         &mut |f| counter::instructions(counter.ticks_of(f)),
         &mut |l| {
-            converged &= l.converged;
+            converged &= l.converged || !crate::bench::must_converge(l.case);
             hprintln!(
                 "bench case={} steps_per_section={} total_steps={} instructions={} sweeps={} converged={} tip_error_nm={}",
                 l.case,

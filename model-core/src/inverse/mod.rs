@@ -47,8 +47,11 @@ pub struct InverseSettings<T> {
     /// Iterations (each one sweep with six tangents).
     pub max_iterations: u16,
     /// Most sweeps one estimate may take, the cold forward solve at its start included: the bound on
-    /// its cost, whatever the measurements (data no load explains included). Reaching it ends the
-    /// solve with [`crate::Termination::IterationLimit`].
+    /// its cost, whatever the measurements (data no load explains included). A step begun within it
+    /// finishes (its trial sweep and the projection back onto the equilibrium, 9 sweeps at most), so
+    /// an estimate takes at most `max_sweeps + 9`. Reaching it ends the solve with
+    /// [`crate::Termination::IterationLimit`], or, when only the search for other answers is cut
+    /// short, the verdict [`Determination::Unverified`].
     pub max_sweeps: u16,
     /// Tolerance on the dimensionless tip-moment residual (as in [`ShootingSettings::tolerance`]).
     pub tolerance: T,

@@ -963,6 +963,9 @@ where
             return Scan::Unique;
         };
         // The point's linearisation again (one sweep: the same point gives the same sweep).
+        if work.sweeps >= limit {
+            return Scan::Incomplete;
+        }
         let Some(mut alt_lin) = self.linearize_at(&alt, work) else {
             return Scan::Incomplete;
         };

@@ -154,9 +154,12 @@ where
             Stability::Unchecked
         }
     };
-    // Without a stability test a direct solve cannot tell a wrong branch from the right one: a cold
-    // start then follows the branch from the unloaded rod.
-    let direct = start.is_some() || ode.has_stability_test();
+    // Without a stability test that can reject it, a direct solve cannot tell a wrong branch from the
+    // right one: a cold start then follows the branch from the unloaded rod. So with no test, with
+    // the test switched off, and with a moment of fixed direction (not conservative: the energy test
+    // does not apply, and a direct answer 1.57 rod lengths from the loaded-from-zero one passed).
+    let testable = ode.has_stability_test() && ode.conservative() && settings.check_stability;
+    let direct = start.is_some() || testable;
     let mut result = direct.then(|| {
         let options = NewtonOptions {
             tolerance: settings.tolerance,
