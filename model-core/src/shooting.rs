@@ -104,7 +104,8 @@ pub(crate) fn equilibrium<T: Scalar, const K: usize>(
                     termination: Termination::ContinuationFailed,
                     iterations: failed.work.iterations,
                     sweeps: failed.work.sweeps,
-                    residual: T::zero(),
+                    // No iterate to measure: not a number, rather than a zero that reads as exact.
+                    residual: T::lit(f64::NAN),
                     load_steps: failed.load_steps,
                     stability: Stability::Unchecked,
                     phase_per_step_rad: T::zero(),

@@ -183,3 +183,69 @@ fn invalid_settings_are_refused() -> Result<(), ModelError> {
     assert_eq!(out.estimate, None);
     Ok(())
 }
+
+/// The first tick's cold estimate over small loads in 26 directions (0.02-0.14 N, where an attack
+/// once found a 0.073 N load published `Fresh` and `Determined` 5.7 mm off): whatever is published
+/// is within [`crate::checks::COVERAGE`] of its own standard deviations of the truth, in force and
+/// tip. The truth is f64 on the loop's grid, read through the encoder.
+#[test]
+fn the_first_tick_is_never_confidently_wrong() -> Result<(), ModelError> {
+    use crate::checks::COVERAGE;
+    use crate::config::{STEPS_PER_SECTION, metres_per_count, rod};
+    use model_core::{ShootingSettings, Stability, Start, TipLoad};
+    let model = model()?;
+    let truth_model = Model::<f64>::new(rod(STEPS_PER_SECTION)?)?;
+    let count_m = f64::from(metres_per_count());
+    let mut directions = Vec::new();
+    for x in [-1.0, 0.0, 1.0] {
+        for y in [-1.0, 0.0, 1.0] {
+            for z in [-1.0f64, 0.0, 1.0] {
+                if x != 0.0 || y != 0.0 || z != 0.0 {
+                    directions.push(Vector3::new(x, y, z).normalize());
+                }
+            }
+        }
+    }
+    let (mut fresh, mut tried) = (0, 0);
+    for magnitude_n in [0.02, 0.05, 0.073, 0.1, 0.14] {
+        for direction in &directions {
+            let force = direction * magnitude_n;
+            let truth = truth_model.solve(
+                &TipLoad::force(force),
+                Start::Cold,
+                &ShootingSettings::default(),
+            )?;
+            if !(truth.report.termination.is_success()
+                && truth.report.stability == Stability::Stable)
+            {
+                continue;
+            }
+            tried += 1;
+            let read = [0, 1, 2].map(|c| {
+                Ok((truth.cable_lengths_m[c] / count_m).round() as f32 * metres_per_count())
+            });
+            let mut lp = EstimatorLoop::new(&model, loop_config())?;
+            let out = lp.tick(&at(0, read));
+            if out.status != Status::Fresh {
+                continue;
+            }
+            fresh += 1;
+            let record = out.estimate.expect("fresh estimate");
+            for i in 0..3 {
+                let force_off = (f64::from(record.tip_force_n[i]) - force[i]).abs();
+                let tip_off = (f64::from(record.tip_position_m[i]) - truth.tip_position_m[i]).abs();
+                assert!(
+                    force_off <= COVERAGE * f64::from(record.force_std_n[i])
+                        && tip_off <= COVERAGE * f64::from(record.tip_std_m[i]),
+                    "{force:?} N: published {record:?}"
+                );
+            }
+        }
+    }
+    println!("{fresh} of {tried} first ticks published");
+    assert!(
+        fresh * 2 > tried,
+        "{fresh} of {tried} first ticks published"
+    );
+    Ok(())
+}

@@ -103,7 +103,7 @@ impl<T: Scalar> Default for InverseSettings<T> {
         let eps = T::default_epsilon();
         Self {
             max_iterations: 60,
-            max_sweeps: 250,
+            max_sweeps: 400,
             tolerance: default_tolerance(),
             length_tolerance_m: (eps * T::lit(10.0)).max(T::lit(1e-12)),
             step_tolerance_sigma: T::lit(1e-4),

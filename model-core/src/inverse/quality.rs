@@ -23,9 +23,10 @@ pub enum Determination {
     Undetermined,
     /// No load of the model explains the measurements within three standard deviations.
     Inconsistent,
-    /// Two or more loads far apart explain the measurements about as well (three cables and three
-    /// force components admit several exact fits): the answer is the one the prior prefers, and the
-    /// data alone cannot tell.
+    /// Two or more loads far apart, both within the search's reach
+    /// ([`crate::inverse::InverseSettings::scan_reach`]), explain the measurements about as well
+    /// (three cables and three force components admit several exact fits): the answer is the one
+    /// the prior prefers, and the data alone cannot tell.
     Ambiguous,
     /// The search for other answers ran out of its sweep budget
     /// ([`crate::inverse::InverseSettings::max_sweeps`]) before it could rule them out: the answer

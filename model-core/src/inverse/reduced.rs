@@ -72,9 +72,6 @@ const SCAN_ITERATIONS: u16 = 2;
 /// explains the data as well (three standard deviations in one direction).
 const ALTERNATIVE_CHI2: f64 = 9.0;
 
-/// Sweeps at most for the unconstrained solve from a point of the profile.
-const SETTLE_SWEEPS: u16 = 15;
-
 /// Power iterations for the weakest direction.
 const WEAKEST_ITERATIONS: u16 = 30;
 
@@ -93,10 +90,10 @@ pub(super) struct Widen<T, const P: usize> {
 enum Scan {
     /// No other answer within its reach.
     Unique,
-    /// Another answer explains the data about as well.
+    /// Another answer within the search's reach explains the data about as well.
     Ambiguous,
-    /// Another answer scores better and replaced the first; `true` when the first explains the
-    /// data about as well.
+    /// Another answer scores better (data and prior) and replaced the first; `true` when the first
+    /// explains the data about as well.
     Better(bool),
     /// The budget ran out before the search was done.
     Incomplete,
@@ -803,6 +800,13 @@ where
         Some(v)
     }
 
+    /// How far the search for other answers around `p` reaches, in buckling scales: three times
+    /// `p`'s own size, or [`InverseSettings::scan_reach`], whichever is larger.
+    fn reach_scales(&self, p: &SVector<T, P>) -> T {
+        let size = p.component_mul(&self.buckling_weight).norm();
+        (size * T::lit(SCAN_FACTOR)).max(self.settings.scan_reach)
+    }
+
     /// Leads to other answers that explain the measurements: a profile of the merit along the
     /// direction `v` the data determine worst. The parameters' component along `v` is held at values
     /// stepping away from the answer's on either side (from [`SCAN_FIRST`] of the answer's load or
@@ -837,7 +841,7 @@ where
         // The posterior's width along v as the profile shows it (see `Widen`).
         let mut width = T::zero();
         let size = x.p.component_mul(&self.buckling_weight).norm();
-        let reach = (size * T::lit(SCAN_FACTOR)).max(self.settings.scan_reach) * scale;
+        let reach = self.reach_scales(&x.p) * scale;
         let base = v.dot(&x.p);
         for (side, start) in [T::one(), -T::one()]
             .into_iter()
@@ -852,6 +856,8 @@ where
             let mut first = true;
             // The highest misfit on the profile so far: another answer lies beyond a crest.
             let mut crest = best_misfit;
+            // The misfit at the previous point of the profile.
+            let mut previous = best_misfit;
             while offset < reach && step >= scale * T::lit(0.25) {
                 if work.sweeps >= limit {
                     return Err(OutOfBudget);
@@ -873,6 +879,8 @@ where
                 offset = next;
                 step *= T::lit(SCAN_GROWTH);
                 let misfit = self.misfit(&here_lin).unwrap_or(best_misfit);
+                let falling = misfit < previous;
+                previous = misfit;
                 // The profile's rise over the answer: within one unit the load is inside the
                 // posterior's one-standard-deviation interval; at the first point, the rise gives the
                 // width a quadratic through it would have.
@@ -894,8 +902,10 @@ where
                 }
                 // Past a crest the merit falls outward: follow the profile down to its next valley
                 // (where the slope turns again, or the data are explained); the lowest point seen
-                // since the crest is the lead.
-                let descending = side * slope < T::zero();
+                // since the crest is the lead. Falling is read from the slope and from the misfit
+                // against the previous point: a point a few steps short of the profile's floor can
+                // have its slope wrong, and growing steps can stride over a narrow valley.
+                let descending = side * slope < T::zero() || falling;
                 if descending || lowest.is_some() {
                     if lowest.is_none_or(|(_, m)| misfit < m) {
                         lowest = Some((here, misfit));
@@ -916,10 +926,10 @@ where
         Ok(leads)
     }
 
-    /// Follows the leads of [`Problem::alternatives`]: an unconstrained solve from each (at most
-    /// [`SETTLE_SWEEPS`] sweeps), kept when it reaches a point more than half a buckling scale from
-    /// the answer `x`; the best of those, if it scores better but has not converged, is finished with
-    /// what the budget has left. A converged better answer replaces `x` and `lin`.
+    /// Follows the leads of [`Problem::alternatives`]: an unconstrained solve from each, to
+    /// convergence or a stall within the budget (a lead whose solve the budget cuts short leaves
+    /// the question open: [`Scan::Incomplete`]). A point more than half a buckling scale from the
+    /// answer `x` is another answer; the best of them replaces `x` and `lin` when it scores better.
     // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
     #[inline(never)]
     fn weigh(
@@ -934,7 +944,8 @@ where
             return Scan::Unique;
         };
         let best_merit = self.merit(&x.p, lin);
-        // The best point reached, its merit, and whether its solve converged.
+        // The best other answer reached, its merit, and whether its solve converged (else it
+        // stalled: no step improves it, a local minimum as far as the solve can tell).
         let mut found: Option<(Point<T, P>, T, bool)> = None;
         for start in starts.iter().flatten() {
             if work.sweeps >= limit {
@@ -945,44 +956,45 @@ where
             let Some(mut reached_lin) = self.linearize_at(&reached, work) else {
                 continue;
             };
-            let budget = limit.min(work.sweeps.saturating_add(SETTLE_SWEEPS));
-            let termination = self.refine(&mut reached, &mut reached_lin, budget, work);
+            let termination = self.refine(&mut reached, &mut reached_lin, limit, work);
+            if termination == Termination::IterationLimit {
+                return Scan::Incomplete;
+            }
             let apart = (reached.p - x.p)
                 .component_mul(&self.buckling_weight)
                 .norm()
                 > T::lit(0.5);
-            // Where the budget ran out or the solve stalled first, the point reached may still
-            // explain the data (its misfit is judged below); only a converged one may replace the
-            // answer.
             let merit = self.merit(&reached.p, &reached_lin);
             if apart && found.is_none_or(|(_, m, _)| m > merit) {
                 found = Some((reached, merit, termination.is_success()));
             }
         }
-        let Some((mut alt, alt_merit, mut converged)) = found else {
+        let Some((alt, alt_merit, converged)) = found else {
             return Scan::Unique;
         };
         // The point's linearisation again (one sweep: the same point gives the same sweep).
         if work.sweeps >= limit {
             return Scan::Incomplete;
         }
-        let Some(mut alt_lin) = self.linearize_at(&alt, work) else {
+        let Some(alt_lin) = self.linearize_at(&alt, work) else {
             return Scan::Incomplete;
         };
-        if !converged && alt_merit < best_merit {
-            // A better answer not yet converged: finish it with what the budget has left.
-            converged = self
-                .refine(&mut alt, &mut alt_lin, limit, work)
-                .is_success();
-        }
         let alt_misfit = self.misfit(&alt_lin).unwrap_or(best_misfit);
-        if converged && self.merit(&alt.p, &alt_lin) < best_merit {
-            // The other answer is the better one: it is returned, and ambiguous if this one fits as
-            // well.
-            let this_fits = best_misfit <= alt_misfit + T::lit(ALTERNATIVE_CHI2);
+        // A rival explains the data about as well (the prior aside: it is a guess at the loads the
+        // robot meets, not a measurement) and lies within the search's reach, the loads the robot
+        // can meet (a pull a hundred buckling scales strong straightens the rod as a small load
+        // does, and is no rival to it when the robot cannot pull that hard).
+        let within_reach = |p: &SVector<T, P>| {
+            p.component_mul(&self.buckling_weight).norm() <= self.reach_scales(&x.p)
+        };
+        if converged && alt_merit < best_merit {
+            // The other answer scores better (data and prior): it is returned, and ambiguous if
+            // this one is a rival to it.
+            let this_fits =
+                best_misfit <= alt_misfit + T::lit(ALTERNATIVE_CHI2) && within_reach(&x.p);
             (*x, *lin) = (alt, alt_lin);
             Scan::Better(this_fits)
-        } else if alt_misfit <= best_misfit + T::lit(ALTERNATIVE_CHI2) {
+        } else if alt_misfit <= best_misfit + T::lit(ALTERNATIVE_CHI2) && within_reach(&alt.p) {
             Scan::Ambiguous
         } else {
             Scan::Unique
