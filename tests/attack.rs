@@ -7,7 +7,7 @@
 //! answer is not to be trusted as determined.
 //!
 //! Loads drawn by proptest's runner from a fixed seed, so a run reproduces: 40 per configuration in
-//! CI; `ATTACK_CASES` and `ATTACK_SEED` run a large attack (`reports/attack.md` has one). Each
+//! CI; `ATTACK_CASES` and `ATTACK_SEED` run a large attack (`report/attack.md` has one). Each
 //! configuration prints its tally of verdicts and lists every answer that breaks the contract.
 
 use model_checks::reference;
@@ -132,27 +132,28 @@ fn campaign<T: Scalar>(name: &str, steps: u16, resolution_m: f64) {
     });
     // Load from 0.01 to 100 buckling scales (log-uniform), direction uniform on the sphere.
     let loads = (-2.0f64..2.0, -1.0f64..1.0, 0.0f64..std::f64::consts::TAU);
-    let mut tally: BTreeMap<String, u64> = BTreeMap::new();
+    // Verdicts by decade of load: 0.01-0.1, 0.1-1, 1-10, 10-100 buckling scales.
+    let mut tally: BTreeMap<String, [u64; 4]> = BTreeMap::new();
     let mut broken = Vec::new();
     for _ in 0..cases {
         let (log_scales, cos_polar, azimuth) =
             loads.new_tree(&mut runner).expect("a load").current();
         let scales = 10f64.powf(log_scales);
-        let Some((verdict, bad)) = attack::<T>(steps, resolution_m, scales, cos_polar, azimuth)
-        else {
-            *tally
-                .entry("truth not stable (skipped)".into())
-                .or_default() += 1;
-            continue;
-        };
-        *tally.entry(verdict).or_default() += 1;
+        let decade = ((log_scales + 2.0).floor().max(0.0) as usize).min(3);
+        let verdict = attack::<T>(steps, resolution_m, scales, cos_polar, azimuth);
+        let (name, bad) = verdict.unwrap_or_else(|| ("truth not stable (skipped)".into(), None));
+        if let Some(cell) = tally.entry(name).or_default().get_mut(decade) {
+            *cell += 1;
+        }
         broken.extend(bad.map(|b| {
             format!("{scales:.4} EI/L^2 (attack::<_>({steps}, {resolution_m:e}, {scales:?}, {cos_polar:?}, {azimuth:?})): {b}")
         }));
     }
     println!("{name}: {cases} attacks at {steps} steps per section, {resolution_m:e} m per count");
-    for (verdict, count) in &tally {
-        println!("  {count:>6}  {verdict}");
+    println!("  | verdict | 0.01-0.1 | 0.1-1 | 1-10 | 10-100 EI/L^2 |");
+    println!("  | --- | ---: | ---: | ---: | ---: |");
+    for (verdict, [a, b, c, d]) in &tally {
+        println!("  | {verdict} | {a} | {b} | {c} | {d} |");
     }
     println!(
         "  {:>6}  Converged/Determined beyond {COVERAGE} sigma",

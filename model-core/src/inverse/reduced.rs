@@ -92,17 +92,18 @@ enum Scan {
     Unique,
     /// Another answer within the search's reach explains the data about as well.
     Ambiguous,
-    /// Another answer scores better (data and prior) and replaced the first; `true` when the first
-    /// explains the data about as well.
+    /// Another answer scores clearly better (data and prior, by more than [`ALTERNATIVE_CHI2`]) and
+    /// replaced the first; `true` when the first explains the data about as well.
     Better(bool),
     /// The budget ran out before the search was done.
     Incomplete,
 }
 
 /// Where the profile along the weakest direction suggests other answers: on each side, the lowest
-/// point of a descent past a crest (on the equilibrium at its own load).
+/// point of a descent past a crest and the first point whose free step sees another answer (each on
+/// the equilibrium at its own load).
 struct Leads<T, const P: usize> {
-    starts: [Option<Point<T, P>>; 2],
+    starts: [Option<Point<T, P>>; 4],
     /// The posterior's width along the profile's direction, where the profile measured it.
     widen: Option<Widen<T, P>>,
 }
@@ -800,6 +801,29 @@ where
         Some(v)
     }
 
+    /// Whether the free Gauss-Newton step from a point of a profile (`at`, linearised by `lin`) ends
+    /// more than half a buckling scale from the answer `x` with the data explained (its predicted
+    /// misfit within [`ALTERNATIVE_CHI2`] of `best_misfit`): the linear model there sees another
+    /// answer.
+    fn points_elsewhere(
+        &self,
+        at: &Point<T, P>,
+        lin: &Linearization<T, P>,
+        x: &Point<T, P>,
+        best_misfit: T,
+    ) -> bool {
+        let Some(red) = self.reduce(lin) else {
+            return false;
+        };
+        let Some((_, dp)) = self.step(&red, &at.p, T::zero()) else {
+            return false;
+        };
+        let predicted = (red.c + product(&red.g, &dp)).norm_squared();
+        let target = at.p + dp;
+        let apart = (target - x.p).component_mul(&self.buckling_weight).norm() > T::lit(0.5);
+        apart && predicted <= best_misfit + T::lit(ALTERNATIVE_CHI2)
+    }
+
     /// How far the search for other answers around `p` reaches, in buckling scales: three times
     /// `p`'s own size, or [`InverseSettings::scan_reach`], whichever is larger.
     fn reach_scales(&self, p: &SVector<T, P>) -> T {
@@ -826,7 +850,7 @@ where
         work: &mut Work,
     ) -> Result<Leads<T, P>, OutOfBudget> {
         let mut leads = Leads {
-            starts: [None, None],
+            starts: [None; 4],
             widen: None,
         };
         let (Some(v), Some(best_misfit)) = (self.weakest_direction(lin), self.misfit(lin)) else {
@@ -843,9 +867,9 @@ where
         let size = x.p.component_mul(&self.buckling_weight).norm();
         let reach = self.reach_scales(&x.p) * scale;
         let base = v.dot(&x.p);
-        for (side, start) in [T::one(), -T::one()]
+        for (side, starts) in [T::one(), -T::one()]
             .into_iter()
-            .zip(leads.starts.iter_mut())
+            .zip(leads.starts.chunks_exact_mut(2))
         {
             let (mut here, mut here_lin) = (*x, *lin);
             // Steps relative to the answer's own size: the profile's scale of change grows with it.
@@ -853,6 +877,8 @@ where
                 (T::zero(), scale * (size * T::lit(SCAN_FIRST)).max(T::one()));
             // The lowest point of a descent along the profile, past a crest, and its misfit.
             let mut lowest: Option<(Point<T, P>, T)> = None;
+            // The first point whose free step sees another answer.
+            let mut pointed: Option<Point<T, P>> = None;
             let mut first = true;
             // The highest misfit on the profile so far: another answer lies beyond a crest.
             let mut crest = best_misfit;
@@ -900,11 +926,18 @@ where
                     width = width.max(next / T::lit(3.0));
                     continue;
                 }
+                // Out of the answer's valley, the linear model at this point may already see another
+                // answer: its free Gauss-Newton step ends far from the answer with the data
+                // explained. That point is a lead (the profile's steps, growing, can stride over a
+                // narrow valley that the samples' misfits and slopes never show).
+                if pointed.is_none() && self.points_elsewhere(&here, &here_lin, x, best_misfit) {
+                    pointed = Some(here);
+                }
                 // Past a crest the merit falls outward: follow the profile down to its next valley
                 // (where the slope turns again, or the data are explained); the lowest point seen
                 // since the crest is the lead. Falling is read from the slope and from the misfit
                 // against the previous point: a point a few steps short of the profile's floor can
-                // have its slope wrong, and growing steps can stride over a narrow valley.
+                // have its slope wrong.
                 let descending = side * slope < T::zero() || falling;
                 if descending || lowest.is_some() {
                     if lowest.is_none_or(|(_, m)| misfit < m) {
@@ -917,7 +950,10 @@ where
                 }
             }
             // A descent cut short by the reach or a point not reached is a lead where it got to.
-            *start = lowest.map(|(point, _)| point);
+            if let [descent, free] = starts {
+                *descent = lowest.map(|(point, _)| point);
+                *free = pointed;
+            }
         }
         leads.widen = (width > T::zero()).then_some(Widen {
             direction: v,
@@ -936,7 +972,7 @@ where
         &self,
         x: &mut Point<T, P>,
         lin: &mut Linearization<T, P>,
-        starts: &[Option<Point<T, P>>; 2],
+        starts: &[Option<Point<T, P>>; 4],
         limit: u16,
         work: &mut Work,
     ) -> Scan {
@@ -987,14 +1023,18 @@ where
         let within_reach = |p: &SVector<T, P>| {
             p.component_mul(&self.buckling_weight).norm() <= self.reach_scales(&x.p)
         };
-        if converged && alt_merit < best_merit {
-            // The other answer scores better (data and prior): it is returned, and ambiguous if
-            // this one is a rival to it.
-            let this_fits =
-                best_misfit <= alt_misfit + T::lit(ALTERNATIVE_CHI2) && within_reach(&x.p);
+        let chi2 = T::lit(ALTERNATIVE_CHI2);
+        if converged && alt_merit < best_merit - chi2 {
+            // The other answer scores clearly better (data and prior): it is returned, and
+            // ambiguous if this one is a rival to it.
+            let this_fits = best_misfit <= alt_misfit + chi2 && within_reach(&x.p);
             (*x, *lin) = (alt, alt_lin);
             Scan::Better(this_fits)
-        } else if alt_misfit <= best_misfit + T::lit(ALTERNATIVE_CHI2) && within_reach(&alt.p) {
+        } else if alt_merit < best_merit
+            || (alt_misfit <= best_misfit + chi2 && within_reach(&alt.p))
+        {
+            // A rival, or an answer scoring a little better: this one is kept (the one its branch
+            // leads to; two equally good fits do not swap on rounding), and not called determined.
             Scan::Ambiguous
         } else {
             Scan::Unique
