@@ -94,13 +94,18 @@ compare_expected() {
     fi
 }
 
-# elf_sizes ELF: "flash static_ram" in bytes from the program headers: flash is every loaded
-# segment's file size at a flash address, static RAM every segment's memory size in RAM.
+# elf_sizes ELF: "flash static_ram" in bytes from the program headers: flash is the span of the
+# loaded segments at flash addresses from the start of flash, static RAM every segment's memory
+# size in RAM.
 elf_sizes() {
     local flash=0 ram=0 type off vaddr paddr filesz memsz rest
     while read -r type off vaddr paddr filesz memsz rest; do
         [[ "$type" == LOAD ]] || continue
-        if ((paddr >= 0x08000000 && paddr < 0x08100000)); then flash=$((flash + filesz)); fi
+        # Flash is the span the image occupies from the start of flash, alignment gaps between
+        # sections included (as the image's own linker symbols count it).
+        if ((paddr >= 0x08000000 && paddr < 0x08100000 && paddr + filesz - 0x08000000 > flash)); then
+            flash=$((paddr + filesz - 0x08000000))
+        fi
         if ((vaddr >= 0x20000000 && vaddr < 0x20020000)); then ram=$((ram + memsz)); fi
     done < <(readelf -lW "$1")
     echo "$flash $ram"

@@ -24,10 +24,17 @@ pub const fn valid_counts_per_turn(counts_per_turn: u32) -> bool {
     counts_per_turn >= 4 && counts_per_turn <= 65_536
 }
 
-/// `step` reduced to the shortest signed step of the same angle, in `[-turn/2, turn/2)`.
+/// `step` reduced to the shortest signed step of the same angle, in `[-turn/2, turn - turn/2)`.
+/// Reduced first, then shifted: no intermediate overflows (shifting first wrapped steps near
+/// `i32::MAX` by `2^32`, which changes the angle when the turn does not divide it).
 pub fn shortest(step: i32, counts_per_turn: u32) -> i32 {
     let turn = i32::try_from(counts_per_turn).unwrap_or(i32::MAX);
-    (step.wrapping_add(turn / 2)).rem_euclid(turn) - turn / 2
+    let within = step.rem_euclid(turn);
+    if within < turn - turn / 2 {
+        within
+    } else {
+        within - turn
+    }
 }
 
 /// The position whose angle is `raw_counts` nearest to `reference`, counts: `reference` plus the
@@ -57,10 +64,24 @@ pub fn angle(position: i32, counts_per_turn: u32) -> u16 {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
+    /// A fixed seed, so a run reproduces (a random one found the overflow in `shortest`:
+    /// `step = 2147464585`, `turn = 38126`, kept below as a case).
+    fn config() -> Config {
+        Config {
+            cases: 2048,
+            rng_seed: RngSeed::Fixed(0x7075_726e),
+            failure_persistence: None,
+            ..Config::default()
+        }
+    }
 
     const TURN: u32 = 16_384;
 
     proptest! {
+        #![proptest_config(config())]
+
         #[test]
         fn the_nearest_position_has_the_angle_and_is_within_half_a_turn(
             reference in -1_000_000_000i32..1_000_000_000,
@@ -79,6 +100,16 @@ mod tests {
             prop_assert_eq!((i64::from(step) - i64::from(s)).rem_euclid(t), 0);
             prop_assert!(-t / 2 <= i64::from(s) && i64::from(s) < t - t / 2);
         }
+    }
+
+    #[test]
+    fn a_step_near_the_largest_is_reduced_without_overflow() {
+        let (step, turn) = (2_147_464_585, 38_126u32);
+        let s = shortest(step, turn);
+        assert_eq!((i64::from(step) - i64::from(s)).rem_euclid(38_126), 0);
+        assert!((-19_063..19_063).contains(&s), "{s}");
+        assert_eq!(shortest(i32::MIN, 16_384), 0);
+        assert_eq!(shortest(i32::MAX, 16_384), -1);
     }
 
     #[test]
