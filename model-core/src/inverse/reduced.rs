@@ -782,8 +782,9 @@ where
     }
 
     /// The direction of the parameters the data determine worst: the smallest eigenvector of the
-    /// data's information `G^T G` (power iteration on its inverse). `None` when the data do not
-    /// determine every direction (the verdict already says so).
+    /// data's information `G^T G` (power iteration on the data-only covariance, from the QR
+    /// factorisation of `G`). `None` when the data do not determine every direction (the verdict
+    /// already says so).
     // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
     #[inline(never)]
     fn weakest_direction(&self, lin: &Linearization<T, P>) -> Option<SVector<T, P>> {
@@ -819,16 +820,23 @@ where
             return false;
         };
         let predicted = (red.c + product(&red.g, &dp)).norm_squared();
-        let target = at.p + dp;
-        let apart = (target - x.p).component_mul(&self.buckling_weight).norm() > T::lit(0.5);
-        apart && predicted <= best_misfit + T::lit(ALTERNATIVE_CHI2)
+        self.apart(&(at.p + dp), &x.p) && predicted <= best_misfit + T::lit(ALTERNATIVE_CHI2)
+    }
+
+    /// The size of parameters `p`, in buckling scales.
+    fn scales(&self, p: &SVector<T, P>) -> T {
+        p.component_mul(&self.buckling_weight).norm()
+    }
+
+    /// Whether two parameter vectors are different answers: more than half a buckling scale apart.
+    fn apart(&self, a: &SVector<T, P>, b: &SVector<T, P>) -> bool {
+        self.scales(&(a - b)) > T::lit(0.5)
     }
 
     /// How far the search for other answers around `p` reaches, in buckling scales: three times
     /// `p`'s own size, or [`InverseSettings::scan_reach`], whichever is larger.
     fn reach_scales(&self, p: &SVector<T, P>) -> T {
-        let size = p.component_mul(&self.buckling_weight).norm();
-        (size * T::lit(SCAN_FACTOR)).max(self.settings.scan_reach)
+        (self.scales(p) * T::lit(SCAN_FACTOR)).max(self.settings.scan_reach)
     }
 
     /// Leads to other answers that explain the measurements: a profile of the merit along the
@@ -836,8 +844,10 @@ where
     /// stepping away from the answer's on either side (from [`SCAN_FIRST`] of the answer's load or
     /// one buckling scale `D`, growing by [`SCAN_GROWTH`], halving where a point is not reached), the
     /// rest re-solved from the previous point; where the merit falls outward along the profile (its
-    /// slope along `v` turns) past a crest, another minimum lies further out, and the lowest point of
-    /// that descent is a lead for [`Problem::weigh`]. The profile reaches loads [`SCAN_FACTOR`] times
+    /// slope along `v` turns, or its misfit drops) past a crest, another minimum lies further out,
+    /// and the lowest point of that descent is a lead for [`Problem::weigh`]; so is the first point
+    /// past the crest whose free step sees another answer ([`Problem::points_elsewhere`]). The
+    /// profile reaches loads [`SCAN_FACTOR`] times
     /// the answer's, or [`InverseSettings::scan_reach`] buckling scales, whichever is larger. On the
     /// way it measures the posterior's width along `v` ([`Widen`]).
     // Out of line: its locals (linearisations, sweeps) need not share a frame with the caller's.
@@ -857,14 +867,14 @@ where
             return Ok(leads);
         };
         // One buckling scale along v, in parameter units.
-        let scale = T::one() / v.component_mul(&self.buckling_weight).norm();
+        let scale = T::one() / self.scales(&v);
         if !(scale.is_finite() && scale > T::zero()) {
             return Ok(leads);
         }
         let best_merit = self.merit(&x.p, lin);
         // The posterior's width along v as the profile shows it (see `Widen`).
         let mut width = T::zero();
-        let size = x.p.component_mul(&self.buckling_weight).norm();
+        let size = self.scales(&x.p);
         let reach = self.reach_scales(&x.p) * scale;
         let base = v.dot(&x.p);
         for (side, starts) in [T::one(), -T::one()]
@@ -996,12 +1006,8 @@ where
             if termination == Termination::IterationLimit {
                 return Scan::Incomplete;
             }
-            let apart = (reached.p - x.p)
-                .component_mul(&self.buckling_weight)
-                .norm()
-                > T::lit(0.5);
             let merit = self.merit(&reached.p, &reached_lin);
-            if apart && found.is_none_or(|(_, m, _)| m > merit) {
+            if self.apart(&reached.p, &x.p) && found.is_none_or(|(_, m, _)| m > merit) {
                 found = Some((reached, merit, termination.is_success()));
             }
         }
@@ -1020,9 +1026,7 @@ where
         // robot meets, not a measurement) and lies within the search's reach, the loads the robot
         // can meet (a pull a hundred buckling scales strong straightens the rod as a small load
         // does, and is no rival to it when the robot cannot pull that hard).
-        let within_reach = |p: &SVector<T, P>| {
-            p.component_mul(&self.buckling_weight).norm() <= self.reach_scales(&x.p)
-        };
+        let within_reach = |p: &SVector<T, P>| self.scales(p) <= self.reach_scales(&x.p);
         let chi2 = T::lit(ALTERNATIVE_CHI2);
         if converged && alt_merit < best_merit - chi2 {
             // The other answer scores clearly better (data and prior): it is returned, and
