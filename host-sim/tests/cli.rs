@@ -623,23 +623,29 @@ fn huge_counts_are_refused_before_anything_is_allocated() {
             "count = 5",
             "count = 9223372036854775807",
             "guides.count",
-            "16",
+            "128",
         ),
         (
             "count-float",
             "count = 5",
             "count = 1e12",
             "guides.count",
-            "16",
+            "128",
         ),
         (
             "count-half",
             "count = 5",
             "count = 2.5",
             "guides.count",
-            "16",
+            "128",
         ),
-        ("count-neg", "count = 5", "count = -1", "guides.count", "16"),
+        (
+            "count-neg",
+            "count = 5",
+            "count = -1",
+            "guides.count",
+            "128",
+        ),
         (
             "points-float",
             "points = 41",
@@ -664,8 +670,8 @@ fn huge_counts_are_refused_before_anything_is_allocated() {
         assert!(err.contains(key) && err.contains(limit), "{to}: {err}");
     }
     // Explicit lists are checked too.
-    let centres: Vec<String> = (0..17)
-        .map(|k| format!("{}", 0.01 + 0.02 * f64::from(k)))
+    let centres: Vec<String> = (0..129)
+        .map(|k| format!("{}", 0.001 + 0.0025 * f64::from(k)))
         .collect();
     let listed = good
         .replace("first_centre_m = 0.005405\n", "")
@@ -678,7 +684,7 @@ fn huge_counts_are_refused_before_anything_is_allocated() {
     let err = stderr(&out);
     assert_eq!(code(&out), 1, "{err}");
     assert!(
-        err.contains("guides.centres_m") && err.contains("16"),
+        err.contains("guides.centres_m") && err.contains("128"),
         "{err}"
     );
     // A whole count written as a float is that count.

@@ -8,7 +8,7 @@ use nalgebra::{Vector2, Vector3};
 
 use model_core::{
     Cable, CrossSection, Guide, GuideMass, Material, ModelError, PointLoad, Rod, Scalar, Section,
-    Stiffness,
+    Stiffness, Tendon,
 };
 
 /// Nitinol rod diameter, m.
@@ -203,4 +203,145 @@ impl GoldenRow {
 /// The golden rows.
 pub fn golden_rows() -> impl Iterator<Item = Result<GoldenRow, ModelError>> {
     csv_rows::<12>(GOLDEN_CSV).map(|r| r.map(GoldenRow::from_values))
+}
+
+/// The tendon golden references (an independent f64 solver of the discrete-guide tendon model; its
+/// conventions are in each file's header).
+pub const TENDON_BENCH_CSV: &str = include_str!("../../tests/data/golden/tendon_bench.csv");
+/// Backbone points of rows 1 and 2 of [`TENDON_BENCH_CSV`].
+pub const TENDON_BENCH_BACKBONE_CSV: &str =
+    include_str!("../../tests/data/golden/tendon_bench_backbone.csv");
+/// The two-section, six-tendon robot.
+pub const TENDON_TWO_SECTION_CSV: &str =
+    include_str!("../../tests/data/golden/tendon_two_section.csv");
+/// Backbone points of rows of [`TENDON_TWO_SECTION_CSV`].
+pub const TENDON_TWO_SECTION_BACKBONE_CSV: &str =
+    include_str!("../../tests/data/golden/tendon_two_section_backbone.csv");
+/// One tendon, 100 guides, no gravity: the discrete model near its continuous limit.
+pub const TENDON_DENSE_CSV: &str = include_str!("../../tests/data/golden/tendon_dense_limit.csv");
+/// Backbone points of rows of [`TENDON_DENSE_CSV`].
+pub const TENDON_DENSE_BACKBONE_CSV: &str =
+    include_str!("../../tests/data/golden/tendon_dense_limit_backbone.csv");
+
+/// The thesis bench with three tendons (the golden `tendon_bench.csv`): experiment 2, average mass,
+/// the five guides plus a termination disk at the tip, all zero-thickness points; tendons at
+/// 1 cm, 0/120/240 degrees (tendon 0 on top), ending at the tip.
+pub fn tendon_bench<T: Scalar>(steps: u16) -> Result<(Rod<T>, [Tendon<T>; 3]), ModelError> {
+    let mut rod = exp2_bench(Exp2Mass::Average, steps, 0)?;
+    for guide in rod.guides.iter_mut() {
+        guide.thickness_m = T::zero();
+    }
+    rod.push_guide(Guide {
+        s_m: T::lit(FREE_LENGTH_M),
+        thickness_m: T::zero(),
+        mass_kg: T::zero(),
+    })?;
+    let tendons = CABLE_DIRECTIONS.map(|(x, y)| Tendon {
+        hole_m: Vector2::new(T::lit(x * CABLE_RADIUS_M), T::lit(y * CABLE_RADIUS_M)),
+        end_m: T::lit(FREE_LENGTH_M),
+        axial_stiffness_n: None,
+        feed_length_m: T::zero(),
+    });
+    Ok((rod, tendons))
+}
+
+/// Thickness standing in for a point-mass guide in the accurate-mass model, m: the mass spread over
+/// a tenth of a millimetre, symmetric about the centre, moves the tip by nanometres.
+pub const POINT_GUIDE_THICKNESS_M: f64 = 1e-4;
+
+/// The golden two-section, six-tendon robot (`tendon_two_section.csv`): 0.15 m of 1.2 mm and 0.12 m
+/// of 1.0 mm Nitinol (58 GPa, 6450 kg/m^3), 14 point guides of 0.25 g; tendons 0-2 end at the
+/// section end, 3-5 at the tip, all at 8 mm. `gravity_m_s2` 0 or 9.81.
+pub fn tendon_two_section<T: Scalar>(
+    steps_per_section: u16,
+    gravity_m_s2: f64,
+) -> Result<(Rod<T>, [Tendon<T>; 6]), ModelError> {
+    let mut rod = Rod::new();
+    rod.gravity_m_s2 = Vector3::new(T::zero(), T::lit(-gravity_m_s2), T::zero());
+    rod.guide_mass = GuideMass::Accurate;
+    for (length, diameter) in [(0.15, 1.2e-3), (0.12, 1.0e-3)] {
+        let material = Material::isotropic(T::lit(58e9), T::lit(POISSON_RATIO))?;
+        rod.push_section(Section {
+            length_m: T::lit(length),
+            stiffness: Stiffness::from_material(
+                &material,
+                &CrossSection::solid_circle(T::lit(diameter))?,
+            )?,
+            line_density_kg_per_m: T::lit(
+                6450.0 * core::f64::consts::PI * diameter * diameter / 4.0,
+            ),
+            steps: steps_per_section,
+        })?;
+    }
+    let centres = (1..=8)
+        .map(|k| 0.15 * f64::from(k) / 8.0)
+        .chain((1..=6).map(|k| 0.15 + 0.02 * f64::from(k)));
+    for (k, s) in centres.enumerate() {
+        // A guide cannot reach past the tip: the tip guide's mass is a point load there.
+        let tip = k == 13;
+        rod.push_guide(Guide {
+            s_m: T::lit(s),
+            thickness_m: T::lit(if tip { 0.0 } else { POINT_GUIDE_THICKNESS_M }),
+            mass_kg: T::lit(if tip { 0.0 } else { 0.25e-3 }),
+        })?;
+        if tip {
+            rod.push_load(PointLoad::mass(T::lit(s), T::lit(0.25e-3)))?;
+        }
+    }
+    let tendon = |angle_deg: f64, end_m: f64| {
+        Tendon::at_angle(
+            T::lit(angle_deg * core::f64::consts::PI / 180.0),
+            T::lit(8e-3),
+            T::lit(end_m),
+        )
+    };
+    Ok((
+        rod,
+        [
+            tendon(60.0, 0.15),
+            tendon(180.0, 0.15),
+            tendon(300.0, 0.15),
+            tendon(0.0, 0.27),
+            tendon(120.0, 0.27),
+            tendon(240.0, 0.27),
+        ],
+    ))
+}
+
+/// One straight 0.2 m rod of 1.4 mm Nitinol (54 GPa), no gravity, `guides` evenly spaced point
+/// guides (the last at the tip) and one tendon at 1 cm along body x ending at the tip: the golden
+/// `tendon_dense_limit.csv` at 100 guides.
+pub fn tendon_dense<T: Scalar>(
+    guides: usize,
+    steps: u16,
+) -> Result<(Rod<T>, [Tendon<T>; 1]), ModelError> {
+    let mut rod = Rod::new();
+    rod.gravity_m_s2 = Vector3::zeros();
+    rod.guide_mass = GuideMass::Ignore;
+    let material = Material::isotropic(T::lit(54e9), T::lit(POISSON_RATIO))?;
+    rod.push_section(Section {
+        length_m: T::lit(0.2),
+        stiffness: Stiffness::from_material(
+            &material,
+            &CrossSection::solid_circle(T::lit(1.4e-3))?,
+        )?,
+        line_density_kg_per_m: T::zero(),
+        steps,
+    })?;
+    for k in 1..=guides {
+        rod.push_guide(Guide {
+            s_m: T::lit(0.2 * k as f64 / guides as f64),
+            thickness_m: T::zero(),
+            mass_kg: T::zero(),
+        })?;
+    }
+    Ok((
+        rod,
+        [Tendon {
+            hole_m: Vector2::new(T::lit(0.01), T::zero()),
+            end_m: T::lit(0.2),
+            axial_stiffness_n: None,
+            feed_length_m: T::zero(),
+        }],
+    ))
 }

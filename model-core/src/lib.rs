@@ -25,6 +25,7 @@
 //! | picking the cheapest variant that meets a tolerance | [`reduction`] |
 //! | elastic stability of an equilibrium (Jacobi fields) | [`stability`] |
 //! | the inverse: tip load from cable lengths | [`inverse`] |
+//! | tendons that pull: routing, guide forces, path lengths, actuation | [`tendon`] |
 //! | shape output | [`shape`] |
 //!
 //! The model's document, with every equation and the corrections to the thesis: `MODEL.md` at the
@@ -62,6 +63,7 @@ pub mod shooting;
 mod solve;
 pub mod stability;
 mod sweep;
+pub mod tendon;
 pub mod transitions;
 
 pub use constitutive::{CrossSection, Material, Stiffness};
@@ -76,11 +78,20 @@ pub use scalar::Scalar;
 pub use shape::ShapePoint;
 pub use shooting::{Equilibrium, Evaluation, ShootingSettings, Start};
 pub use stability::Stability;
+pub use tendon::{
+    DisplacementSettings, DisplacementSolve, MAX_TENDONS, Tendon, TendonEquilibrium, TendonState,
+    Tendons,
+};
 
 /// Most sections in a rod.
 pub const MAX_SECTIONS: usize = 8;
-/// Most cable guides.
-pub const MAX_GUIDES: usize = 16;
+/// Most cable guides: 16 on a controller; 128 with the `many-guides` feature (a host studying dense
+/// guides, e.g. the tendon model's limit of continuous routing).
+pub const MAX_GUIDES: usize = if cfg!(feature = "many-guides") {
+    128
+} else {
+    16
+};
 /// Most cables (a cable's termination bit must fit a `u8`).
 pub const MAX_CABLES: usize = 6;
 /// Most point loads (hung masses, forces, moments).

@@ -78,10 +78,15 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize>
     }
 
     /// The base force (N) and moment (N m) of scaled unknowns `x`.
-    fn force_moment(&self, x: &SVector<T, 6>) -> (Vector3<T>, Vector3<T>) {
+    pub(crate) fn force_moment(&self, x: &SVector<T, 6>) -> (Vector3<T>, Vector3<T>) {
         let n = Vector3::new(x[0], x[1], x[2]) * (self.ei_nm2 / self.model.length_m());
         let m = Vector3::new(x[3], x[4], x[5]) * self.ei_nm2;
         (n, m)
+    }
+
+    /// The load scale.
+    pub(crate) fn alpha(&self) -> T {
+        self.alpha
     }
 
     /// The base strain, force and moment of unknowns `x`.
@@ -117,16 +122,16 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize>
 /// and moment (global).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct State<T: Scalar, A> {
-    p: Vector3<T>,
-    p_lo: Vector3<T>,
-    att: A,
-    n: Vector3<T>,
-    m: Vector3<T>,
+    pub(super) p: Vector3<T>,
+    pub(super) p_lo: Vector3<T>,
+    pub(super) att: A,
+    pub(super) n: Vector3<T>,
+    pub(super) m: Vector3<T>,
 }
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Rates<T: Scalar, A: Attitude<T>> {
-    p: Vector3<T>,
+    pub(super) p: Vector3<T>,
     att: A::Rate,
     n: Vector3<T>,
     m: Vector3<T>,
@@ -135,10 +140,10 @@ pub(crate) struct Rates<T: Scalar, A: Attitude<T>> {
 /// A tangent `(dp, dtheta, dn, dm)`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Tangent<T> {
-    p: Vector3<T>,
-    th: Vector3<T>,
-    n: Vector3<T>,
-    m: Vector3<T>,
+    pub(super) p: Vector3<T>,
+    pub(super) th: Vector3<T>,
+    pub(super) n: Vector3<T>,
+    pub(super) m: Vector3<T>,
 }
 
 impl<T: Scalar> Linear<T> for Tangent<T> {
@@ -518,5 +523,11 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<
 
     fn residual_size(&self, r: &SVector<T, 6>) -> T {
         r.norm() / self.model.moment_scale_nm()
+    }
+
+    /// The base moment's rotation `|m(0)| L / E I` only: an axial force (a tendon's compression)
+    /// turns nothing, and must not loosen the tolerance.
+    fn rotation_rad(&self, x: &SVector<T, 6>) -> T {
+        x.fixed_rows::<3>(3).norm() * self.model.length_m()
     }
 }

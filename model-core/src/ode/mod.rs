@@ -17,6 +17,7 @@
 pub(crate) mod dead_load;
 pub(crate) mod force_state;
 pub(crate) mod planar;
+pub(crate) mod tendon;
 
 use nalgebra::{Matrix3, SVector, Vector3};
 
@@ -183,6 +184,13 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     /// The dimensionless size of a residual (an angle, rad: a tip-moment error of this size times
     /// `E I / L`).
     fn residual_size(&self, r: &SVector<T, K>) -> T;
+
+    /// How far unknowns `x` turn the rod, rad, for the stopping rules' relative tolerance (the
+    /// base strain's `|x| L` unless the unknowns hold more than a rotation).
+    #[inline]
+    fn rotation_rad(&self, x: &SVector<T, K>) -> T {
+        x.norm() * self.length_m()
+    }
 }
 
 /// The base moment of all loads on the straight, unloaded rod at load scale `alpha`:

@@ -110,7 +110,7 @@ where
     let converged = |sw: &Sweep<T, K>, x: &SVector<T, K>| {
         let size = ode.residual_size(&sw.residual);
         if options.to_rounding {
-            stopping::residual_converged(size, x.norm() * length, tolerance)
+            stopping::residual_converged(size, ode.rotation_rad(x), tolerance)
         } else {
             size <= tolerance
         }
@@ -151,7 +151,7 @@ where
             && mu == T::zero()
             && stopping::step_negligible(
                 step.norm() * length,
-                x.norm() * length,
+                ode.rotation_rad(x),
                 tip_move,
                 length,
                 tolerance,

@@ -1,0 +1,678 @@
+//! The rod pulled by tendons: the equations with the internal force and moment as states
+//! (`force_state.rs`), and at each guide the tendons' chord forces (`crate::tendon`), which read the
+//! previous guide's pose, this one's and, where a tendon passes, the next one's.
+//!
+//! The next guide's pose depends on the internal force just distal of this guide, which the jump
+//! sets: the jump is implicit. At such a guide the equations look ahead: from the pose here and a
+//! trial `x = (n(s+), m(s+))` they integrate the segment to the next guide with the same RK4 steps as
+//! the sweep, and Newton solves `g(x) = x - x(s-) + W(P_prev, P, P_next(x)) = 0` (six unknowns, the
+//! segment's six sensitivities as its Jacobian `I + W_next Psi`). Each tangent the sweep carries is
+//! made consistent in the same pass: with `dx0 = dx(s-) - dW_known` integrated ahead to `dP0`, the
+//! change is `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0` (the implicit function
+//! theorem). So a sweep stays a function of the six base unknowns `n(0)`, `m(0)` with an exact
+//! Jacobian, and the one Newton/LM and load continuation (`crate::solve`) solve it: single shooting,
+//! with a local solve per guide instead of multiple shooting's `6 (guides + 1)` unknowns.
+//!
+//! The state carries the previous guide's pose (the base plate's at the start) for the chords.
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use super::force_state::{self, ForceStateRod};
+use super::{Family, Linear, Pose, RodOde};
+use crate::Scalar;
+use crate::kinematics::Attitude;
+use crate::loads::{NoShapeLoad, TipLoad, Wrench};
+use crate::model::{Grid, Model};
+use crate::plan::{Interval, NO_GUIDE, Node};
+use crate::shape::ShapePoint;
+use crate::sweep::{MAX_TANGENTS, rk4};
+use crate::tendon::guide_force::{GuidePose, PoseDelta, guide_wrench, reads_next};
+use crate::tendon::{MAX_TENDONS, Tendons};
+
+/// Newton iterations of one guide's implicit jump.
+const MAX_JUMP_ITERATIONS: usize = 12;
+
+static NO_SHAPE_LOAD: NoShapeLoad = NoShapeLoad;
+
+/// The rod under dead loads and the tendons' tensions.
+#[derive(Debug)]
+pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
+    rod: ForceStateRod<'a, T, A, NoShapeLoad, NODES>,
+    model: &'a Model<T, A, NODES>,
+    tendons: &'a Tendons<T>,
+    /// Full tensions, N.
+    tensions_n: [T; MAX_TENDONS],
+    /// Tensions at the load scale, N.
+    scaled_n: [T; MAX_TENDONS],
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Clone for TendonRod<'_, T, A, NODES> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Copy for TendonRod<'_, T, A, NODES> {}
+
+impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODES> {
+    /// The equations of `model` under `load`, the scene's dead loads and the tendons at
+    /// `tensions_n`, all scaled by `alpha`.
+    pub(crate) fn new(
+        model: &'a Model<T, A, NODES>,
+        tendons: &'a Tendons<T>,
+        tensions_n: &[T; MAX_TENDONS],
+        load: &TipLoad<T>,
+        alpha: T,
+    ) -> Self {
+        Self {
+            rod: ForceStateRod::new(model, &NO_SHAPE_LOAD, load, alpha),
+            model,
+            tendons,
+            tensions_n: *tensions_n,
+            scaled_n: tensions_n.map(|t| t * alpha),
+        }
+    }
+
+    /// The scaled unknowns of a base force (N) and moment (N m).
+    pub(crate) fn unknowns(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> SVector<T, 6> {
+        self.rod.unknowns(force_n, moment_nm)
+    }
+
+    /// The base strain, force and moment of unknowns `x`.
+    pub(crate) fn base(&self, x: &SVector<T, 6>) -> (Vector3<T>, Vector3<T>, Vector3<T>) {
+        self.rod.base(x)
+    }
+
+    fn tensions(&self) -> &[T] {
+        self.scaled_n.get(..self.tendons.len()).unwrap_or(&[])
+    }
+
+    /// `(f L, m)`: a wrench in the units of the scaled residual, N m.
+    fn stack(&self, f: &Vector3<T>, m: &Vector3<T>) -> SVector<T, 6> {
+        let f = f * self.model.length_m();
+        SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
+    }
+
+    fn guide_pose(y: &force_state::State<T, A>) -> GuidePose<T> {
+        GuidePose {
+            position_m: y.p + y.p_lo,
+            rotation: y.att.matrix(),
+        }
+    }
+
+    fn delta(t: &force_state::Tangent<T>) -> PoseDelta<T> {
+        PoseDelta {
+            position_m: t.p,
+            rotation_rad: t.th,
+        }
+    }
+
+    /// The tendons' wrench at `guide` and its change.
+    fn wrench(
+        &self,
+        guide: usize,
+        poses: [&GuidePose<T>; 3],
+        d: Option<[&PoseDelta<T>; 3]>,
+    ) -> (Wrench<T>, Wrench<T>) {
+        guide_wrench(&self.tendons.routed, self.tensions(), guide, poses, d)
+    }
+
+    /// Integrates from node `start` (state `y`, its jump applied) to the next node with a guide,
+    /// carrying `tangents`, with the sweep's steps; the state there before its jump.
+    fn ahead(
+        &self,
+        start: usize,
+        y: &force_state::State<T, A>,
+        tangents: &mut [force_state::Tangent<T>],
+    ) -> Option<force_state::State<T, A>> {
+        let grid = self.rod.grid();
+        let seeds = [Vector3::zeros(); 2 * MAX_TANGENTS];
+        let seeds = seeds.get(..tangents.len())?;
+        let mut stages = [self.rod.blank_stage(); 4];
+        let mut y = *y;
+        let mut index = start;
+        loop {
+            let interval: &Interval<T> = grid.intervals.get(index)?;
+            let field = self.rod.field(interval)?;
+            let (s0, len) = (interval.s0_m, interval.s1_m - interval.s0_m);
+            let steps = T::lit(f64::from(interval.steps));
+            let mut s = s0;
+            for i in 1..=interval.steps {
+                let s_next = if i == interval.steps {
+                    interval.s1_m
+                } else {
+                    s0 + len * (T::lit(f64::from(i)) / steps)
+                };
+                let h = s_next - s;
+                y = rk4::step(&self.rod, &field, s, h, &y, Some(&mut stages));
+                rk4::tangent_steps(&self.rod, &field, &stages, seeds, h, tangents);
+                s = s_next;
+            }
+            let next: &Node<T> = grid.nodes.get(index + 1)?;
+            if next.guide != NO_GUIDE {
+                return Some(y);
+            }
+            let alpha = self.scale();
+            y.n -= next.force_n * alpha;
+            y.m -= next.moment_nm * alpha;
+            index += 1;
+        }
+    }
+
+    fn scale(&self) -> T {
+        // The load scale is the ratio of scaled to full tensions of any tendon, but tensions may be
+        // zero: the wrapped equations keep it.
+        self.rod.alpha()
+    }
+
+    /// The implicit jump at `guide` (node index `index`), where a tendon passes: solves for
+    /// `(n(s+), m(s+))` and makes the tangents consistent. `false` when it does not converge.
+    fn implicit_jump(
+        &self,
+        index: usize,
+        guide: usize,
+        prev: &GuidePose<T>,
+        cur: &GuidePose<T>,
+        y: &mut force_state::State<T, A>,
+        tangents: &mut [Tangent<T>],
+    ) -> bool {
+        let length = self.model.length_m();
+        let zero = PoseDelta::zero();
+        let (n_minus, m_minus) = (y.n, y.m);
+        // Start from the next guide straight ahead.
+        let ds = self
+            .tendons
+            .guide_s_m
+            .get(guide + 1)
+            .map_or(T::zero(), |s| {
+                *s - self.tendons.guide_s_m.get(guide).copied().unwrap_or(*s)
+            });
+        let predicted = GuidePose {
+            position_m: cur.position_m + cur.rotation.column(2) * ds,
+            rotation: cur.rotation,
+        };
+        let (w0, _) = self.wrench(guide, [prev, cur, &predicted], None);
+        let (mut n, mut m) = (n_minus - w0.force_n, m_minus - w0.moment_nm);
+
+        let count = tangents.len().min(MAX_TANGENTS);
+        let mut outer = [force_state::Tangent::zero(); MAX_TANGENTS];
+        let mut next_guess = predicted;
+        let scale = self.stack(&n_minus, &m_minus).norm()
+            + self.stack(&w0.force_n, &w0.moment_nm).norm()
+            + self.model.moment_scale_nm();
+        let eps = T::default_epsilon();
+        let mut last_step = T::max_value().unwrap_or_else(T::one);
+        let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
+        for iteration in 0..MAX_JUMP_ITERATIONS {
+            // Each tangent's change before the look-ahead: what the known poses give (at the last
+            // look-ahead's next pose: the chord ahead sets how this hole's move pulls).
+            for (o, t) in outer.iter_mut().zip(tangents.iter()) {
+                let d = Self::delta(&t.rod);
+                let (_, dw) =
+                    self.wrench(guide, [prev, cur, &next_guess], Some([&t.prev, &d, &zero]));
+                *o = t.rod;
+                o.n -= dw.force_n;
+                o.m -= dw.moment_nm;
+            }
+            for (j, t) in all.iter_mut().enumerate() {
+                *t = force_state::Tangent::zero();
+                if j < 3 {
+                    t.n = super::unit::<T, 3>(j) / length;
+                } else if j < 6 {
+                    t.m = super::unit::<T, 3>(j - 3);
+                } else if let Some(o) = outer.get(j - 6).filter(|_| j - 6 < count) {
+                    *t = *o;
+                }
+            }
+            let Some(dirs) = all.get_mut(..6 + count) else {
+                return false;
+            };
+            let start = force_state::State { n, m, ..*y };
+            let Some(end) = self.ahead(index, &start, dirs) else {
+                return false;
+            };
+            let next = Self::guide_pose(&end);
+            next_guess = next;
+            let (w, _) = self.wrench(guide, [prev, cur, &next], None);
+            let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
+            let mut jacobian = SMatrix::<T, 6, 6>::identity();
+            for (j, mut col) in jacobian.column_iter_mut().enumerate() {
+                let d = all.get(j).map_or(zero, Self::delta);
+                let (_, dw) = self.wrench(guide, [prev, cur, &next], Some([&zero, &zero, &d]));
+                col += self.stack(&dw.force_n, &dw.moment_nm);
+            }
+            let lu = jacobian.lu();
+            let Some(step) = lu.solve(&(-g)) else {
+                return false;
+            };
+            if !crate::scalar::all_finite(&step) {
+                return false;
+            }
+            let (dn, dm) = split(&step);
+            n += dn / length;
+            m += dm;
+            let size = step.norm();
+            let done = size <= T::lit(16.0) * eps * scale;
+            let stalled = iteration >= 2 && size >= last_step * T::lit(0.5);
+            if done || stalled {
+                if size > T::lit(1024.0) * eps * scale {
+                    return false;
+                }
+                // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`.
+                for (j, t) in tangents.iter_mut().enumerate().take(count) {
+                    let (Some(ahead), Some(provisional)) = (all.get(6 + j), outer.get(j)) else {
+                        return false;
+                    };
+                    let d = Self::delta(ahead);
+                    let (_, dw) = self.wrench(guide, [prev, cur, &next], Some([&zero, &zero, &d]));
+                    let Some(delta) = lu.solve(&(-self.stack(&dw.force_n, &dw.moment_nm))) else {
+                        return false;
+                    };
+                    let (dn, dm) = split(&delta);
+                    t.rod.n = provisional.n + dn / length;
+                    t.rod.m = provisional.m + dm;
+                }
+                y.n = n;
+                y.m = m;
+                return true;
+            }
+            last_step = size;
+        }
+        false
+    }
+}
+
+/// The force and moment parts of a stacked wrench.
+fn split<T: Scalar>(v: &SVector<T, 6>) -> (Vector3<T>, Vector3<T>) {
+    (
+        v.fixed_rows::<3>(0).into_owned(),
+        v.fixed_rows::<3>(3).into_owned(),
+    )
+}
+
+/// The rod's state and the previous guide's pose.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct State<T: Scalar, A> {
+    rod: force_state::State<T, A>,
+    prev: GuidePose<T>,
+}
+
+/// A tangent of the rod's state and of the previous guide's pose.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tangent<T> {
+    rod: force_state::Tangent<T>,
+    prev: PoseDelta<T>,
+}
+
+impl<T: Scalar> Linear<T> for Tangent<T> {
+    #[inline]
+    fn zero() -> Self {
+        Self {
+            rod: force_state::Tangent::zero(),
+            prev: PoseDelta::zero(),
+        }
+    }
+
+    /// The previous pose does not change along an interval.
+    #[inline]
+    fn axpy(&self, k: &Self, h: T) -> Self {
+        Self {
+            rod: self.rod.axpy(&k.rod, h),
+            prev: self.prev,
+        }
+    }
+
+    #[inline]
+    fn rk4(&self, k: &[Self; 4], h: T) -> Self {
+        let [k1, k2, k3, k4] = k;
+        Self {
+            rod: self.rod.rk4(&[k1.rod, k2.rod, k3.rod, k4.rod], h),
+            prev: self.prev,
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        self.rod.is_finite()
+            && crate::scalar::all_finite(&self.prev.position_m)
+            && crate::scalar::all_finite(&self.prev.rotation_rad)
+    }
+}
+
+type Inner<'a, T, A, const NODES: usize> = ForceStateRod<'a, T, A, NoShapeLoad, NODES>;
+
+impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
+    for TendonRod<'a, T, A, NODES>
+{
+    type State = State<T, A>;
+    type Rate = force_state::Rates<T, A>;
+    type Stage = force_state::Stage<T>;
+    type Tangent = Tangent<T>;
+    type Seed = Vector3<T>;
+    type Field = force_state::Field<'a, T>;
+    type Track = ();
+
+    fn grid(&self) -> Grid<'_, T> {
+        self.rod.grid()
+    }
+
+    fn length_m(&self) -> T {
+        self.rod.length_m()
+    }
+
+    fn at_scale(&self, load_scale: T) -> Self {
+        Self {
+            rod: self.rod.at_scale(load_scale),
+            scaled_n: self.tensions_n.map(|t| t * load_scale),
+            ..*self
+        }
+    }
+
+    /// The dead loads' guess, plus each tendon on the straight rod: its chords all lie along the
+    /// tangent, so only its termination pulls, `-tau t` at the hole.
+    fn guess(&self) -> SVector<T, 6> {
+        let rod = self.model.rod();
+        let tangent = rod.base_orientation.column(2).into_owned();
+        let mut n0 = Vector3::zeros();
+        let mut m0 = Vector3::zeros();
+        for (r, tau) in self.tendons.routed.iter().zip(self.tensions()) {
+            let f = tangent * (-*tau);
+            n0 += f;
+            m0 += (rod.base_orientation * r.offset_m).cross(&f);
+        }
+        self.rod.guess() + self.rod.unknowns(&n0, &m0)
+    }
+
+    fn start(&self, x: &SVector<T, 6>) -> State<T, A> {
+        let rod = self.model.rod();
+        State {
+            rod: self.rod.start(x),
+            prev: GuidePose {
+                position_m: rod.base_position_m,
+                rotation: rod.base_orientation,
+            },
+        }
+    }
+
+    fn seed(&self, family: Family, j: usize) -> (Tangent<T>, Vector3<T>) {
+        let (rod, seed) = self.rod.seed(family, j);
+        (
+            Tangent {
+                rod,
+                prev: PoseDelta::zero(),
+            },
+            seed,
+        )
+    }
+
+    fn no_seed(&self) -> Vector3<T> {
+        Vector3::zeros()
+    }
+
+    fn blank_stage(&self) -> force_state::Stage<T> {
+        self.rod.blank_stage()
+    }
+
+    fn field(&self, interval: &Interval<T>) -> Option<force_state::Field<'a, T>> {
+        self.rod.field(interval)
+    }
+
+    #[inline]
+    fn bending_load(&self, f: &force_state::Field<'a, T>, s: T, y: &State<T, A>) -> T {
+        self.rod.bending_load(f, s, &y.rod)
+    }
+
+    #[inline]
+    fn stage_bending_load(
+        &self,
+        f: &force_state::Field<'a, T>,
+        stage: &force_state::Stage<T>,
+    ) -> T {
+        self.rod.stage_bending_load(f, stage)
+    }
+
+    #[inline]
+    fn rate(
+        &self,
+        f: &force_state::Field<'a, T>,
+        s: T,
+        y: &State<T, A>,
+        record: Option<&mut force_state::Stage<T>>,
+    ) -> force_state::Rates<T, A> {
+        self.rod.rate(f, s, &y.rod, record)
+    }
+
+    #[inline]
+    fn advance(y: &State<T, A>, k: &force_state::Rates<T, A>, h: T) -> State<T, A> {
+        State {
+            rod: Inner::<T, A, NODES>::advance(&y.rod, k, h),
+            prev: y.prev,
+        }
+    }
+
+    #[inline]
+    fn combine(y: &State<T, A>, k: [&force_state::Rates<T, A>; 4], h: T) -> State<T, A> {
+        State {
+            rod: Inner::<T, A, NODES>::combine(&y.rod, k, h),
+            prev: y.prev,
+        }
+    }
+
+    #[inline]
+    fn tangent_rate(
+        &self,
+        f: &force_state::Field<'a, T>,
+        stage: &force_state::Stage<T>,
+        seed: &Vector3<T>,
+        t: &Tangent<T>,
+    ) -> Tangent<T> {
+        Tangent {
+            rod: self.rod.tangent_rate(f, stage, seed, &t.rod),
+            prev: PoseDelta::zero(),
+        }
+    }
+
+    /// The dead point loads, then at a guide the tendons' jump (implicit where one passes).
+    fn node(
+        &self,
+        node: &Node<T>,
+        _proximal: &force_state::Field<'a, T>,
+        _distal: &force_state::Field<'a, T>,
+        y: &mut State<T, A>,
+        tangents: &mut [Tangent<T>],
+    ) {
+        let alpha = self.rod.alpha();
+        y.rod.n -= node.force_n * alpha;
+        y.rod.m -= node.moment_nm * alpha;
+        if node.guide == NO_GUIDE {
+            return;
+        }
+        let guide = usize::from(node.guide);
+        let cur = Self::guide_pose(&y.rod);
+        let prev = y.prev;
+        let zero = PoseDelta::zero();
+        if reads_next(&self.tendons.routed, self.tensions(), guide) {
+            let grid = self.rod.grid();
+            let index = grid.nodes.iter().position(|n| n.guide == node.guide);
+            let solved = index.is_some_and(|index| {
+                self.implicit_jump(index, guide, &prev, &cur, &mut y.rod, tangents)
+            });
+            if !solved {
+                // No consistent jump: the sweep reports a non-finite result, never a wrong one.
+                y.rod.n = Vector3::repeat(T::lit(f64::NAN));
+            }
+        } else {
+            let (w, _) = self.wrench(guide, [&prev, &cur, &cur], None);
+            y.rod.n -= w.force_n;
+            y.rod.m -= w.moment_nm;
+            for t in tangents.iter_mut() {
+                let d = Self::delta(&t.rod);
+                let (_, dw) = self.wrench(guide, [&prev, &cur, &cur], Some([&t.prev, &d, &zero]));
+                t.rod.n -= dw.force_n;
+                t.rod.m -= dw.moment_nm;
+            }
+        }
+        y.prev = cur;
+        for t in tangents.iter_mut() {
+            t.prev = Self::delta(&t.rod);
+        }
+    }
+
+    /// The wrapped tip condition, less the tendons terminating at a tip guide.
+    fn tip(
+        &self,
+        node: Option<&Node<T>>,
+        last: &force_state::Field<'a, T>,
+        y: &State<T, A>,
+        tangents: &[Tangent<T>],
+        seeds: &[Vector3<T>],
+        d: &mut [SVector<T, 6>],
+    ) -> SVector<T, 6> {
+        let mut rod_tangents = [force_state::Tangent::zero(); MAX_TANGENTS];
+        for (r, t) in rod_tangents.iter_mut().zip(tangents) {
+            *r = t.rod;
+        }
+        let rod_tangents = rod_tangents.get(..tangents.len()).unwrap_or(&[]);
+        let mut r = self.rod.tip(node, last, &y.rod, rod_tangents, seeds, d);
+        if let Some(node) = node.filter(|n| n.guide != NO_GUIDE) {
+            let guide = usize::from(node.guide);
+            let cur = Self::guide_pose(&y.rod);
+            let zero = PoseDelta::zero();
+            let (w, _) = self.wrench(guide, [&y.prev, &cur, &cur], None);
+            r -= self.stack(&w.force_n, &w.moment_nm);
+            for (e, t) in d.iter_mut().zip(tangents) {
+                let dc = Self::delta(&t.rod);
+                let (_, dw) =
+                    self.wrench(guide, [&y.prev, &cur, &cur], Some([&t.prev, &dc, &zero]));
+                *e -= self.stack(&dw.force_n, &dw.moment_nm);
+            }
+        }
+        r
+    }
+
+    fn pose(&self, y: &State<T, A>) -> Pose<T> {
+        self.rod.pose(&y.rod)
+    }
+
+    fn tangent_pose(&self, y: &State<T, A>, t: &Tangent<T>) -> (Vector3<T>, Vector3<T>) {
+        self.rod.tangent_pose(&y.rod, &t.rod)
+    }
+
+    fn shape_point(&self, s: T, y: &State<T, A>, f: &force_state::Field<'a, T>) -> ShapePoint<T> {
+        self.rod.shape_point(s, &y.rod, f)
+    }
+
+    fn finite(&self, y: &State<T, A>, tangents: &[Tangent<T>]) -> bool {
+        let mut rod_tangents = [force_state::Tangent::zero(); MAX_TANGENTS];
+        for (r, t) in rod_tangents.iter_mut().zip(tangents) {
+            *r = t.rod;
+        }
+        let rod_tangents = rod_tangents.get(..tangents.len()).unwrap_or(&[]);
+        self.rod.finite(&y.rod, rod_tangents) && tangents.iter().all(Linear::is_finite)
+    }
+
+    /// No energy test with tendons yet: a cold solve follows the branch from the slack rod by load
+    /// continuation and the answer's stability is reported unchecked.
+    fn has_stability_test(&self) -> bool {
+        false
+    }
+
+    /// Constant tensions are conservative (potential `tau` times the path length).
+    fn conservative(&self) -> bool {
+        true
+    }
+
+    fn track(&self) {}
+
+    fn crosses(
+        &self,
+        _track: &mut (),
+        _y: &State<T, A>,
+        _tangents: &[Tangent<T>],
+        _f: &force_state::Field<'a, T>,
+        _step_m: T,
+    ) -> bool {
+        false
+    }
+
+    fn jacobi_rotation(&self, _d_rotation: &Vector3<T>) -> SVector<T, 6> {
+        SVector::zeros()
+    }
+
+    fn residual_size(&self, r: &SVector<T, 6>) -> T {
+        self.rod.residual_size(r)
+    }
+
+    fn rotation_rad(&self, x: &SVector<T, 6>) -> T {
+        self.rod.rotation_rad(x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::{TangentSet, sweep};
+    use crate::tendon::Tendon;
+    use crate::{CrossSection, Guide, GuideMass, Material, Rod, Section, Stiffness};
+
+    fn scene() -> (Model<f64>, [Tendon<f64>; 2]) {
+        let mut rod = Rod::new();
+        rod.gravity_m_s2 = Vector3::new(0.0, -9.81, 0.0);
+        rod.guide_mass = GuideMass::Ignore;
+        let material = Material::isotropic(60e9, 0.3).unwrap();
+        rod.push_section(Section {
+            length_m: 0.3,
+            stiffness: Stiffness::from_material(
+                &material,
+                &CrossSection::solid_circle(1.5e-3).unwrap(),
+            )
+            .unwrap(),
+            line_density_kg_per_m: 0.03,
+            steps: 60,
+        })
+        .unwrap();
+        for k in 1..=4 {
+            rod.push_guide(Guide {
+                s_m: 0.075 * f64::from(k),
+                thickness_m: 0.0,
+                mass_kg: 0.0,
+            })
+            .unwrap();
+        }
+        let model = Model::new(rod).unwrap();
+        (
+            model,
+            [
+                Tendon::at_angle(0.3, 0.01, 0.3),
+                Tendon::at_angle(2.0, 0.008, 0.15),
+            ],
+        )
+    }
+
+    /// The sweep's Jacobian (tangents through the implicit jumps) against central differences.
+    #[test]
+    fn tendon_jacobian_matches_finite_differences() {
+        let (model, tendons) = scene();
+        let tendons = Tendons::new(&model, &tendons).unwrap();
+        let mut tau = [0.0; MAX_TENDONS];
+        tau[0] = 2.0;
+        tau[1] = 1.5;
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0);
+        let x = ode.guess() * 0.7;
+        let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
+        assert!(sw.finite);
+        let j = sw.jacobian();
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        for c in 0..6 {
+            let mut dx = SVector::<f64, 6>::zeros();
+            dx[c] = h;
+            let plus = sweep(&ode, &(x + dx), TangentSet::NONE, None);
+            let minus = sweep(&ode, &(x - dx), TangentSet::NONE, None);
+            let fd = (plus.residual - minus.residual) / (2.0 * h);
+            let err = (fd - j.column(c)).norm() / j.norm();
+            worst = worst.max(err);
+        }
+        assert!(worst < 1e-6, "Jacobian off by {worst:e} (relative)");
+    }
+}

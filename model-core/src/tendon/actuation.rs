@@ -1,0 +1,328 @@
+//! Displacement control (MODEL.md §6.3): the spool encoders give each tendon's displacement and the
+//! tensions are unknowns.
+//!
+//! Tendon `j` was set on the straight, unloaded rod with zero tension: its unstretched free length,
+//! spool to termination, was `U0 = feed + rest`, `rest` its path there (its termination's arc
+//! length). The spool has since taken in `d_j` (positive shortens), so `U = U0 - d`. Under tension
+//! `tau` it stretches to `U (1 + tau / (E_t A_t))` (`E_t A_t` infinite for an inextensible tendon)
+//! and must span `feed + path(tau, F)`. The gap
+//! `phi = U (1 + tau / E_t A_t) - feed - path` is the slack: a taut tendon has `phi = 0` and
+//! `tau >= 0`, a slack one `tau = 0` and `phi >= 0`; never a negative tension, never a tendon
+//! longer than its stretch allows. This complementarity is solved as
+//! `FB(tau / tau_s, phi / r) = a + b - sqrt(a^2 + b^2) = 0` (Fischer-Burmeister) by a semi-smooth
+//! Newton with a backtracking line search; `tau_s` bends the rod about a radian through the largest
+//! offset `r`. Each iteration is a forward solve from tensions (`forward.rs`), warm, and the path's
+//! sensitivity to the tensions (`sensitivity.rs`).
+
+use heapless::Vec;
+use nalgebra::{SMatrix, SVector};
+
+use super::sensitivity::{sensitivity, tension_scale_n};
+use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
+use crate::Scalar;
+use crate::error::{ModelError, finite};
+use crate::kinematics::Attitude;
+use crate::loads::TipLoad;
+use crate::model::Model;
+use crate::report::Termination;
+use crate::shooting::ShootingSettings;
+use crate::solve::stopping::default_tolerance;
+
+/// Settings of the displacement-controlled solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DisplacementSettings<T> {
+    /// Semi-smooth Newton iterations.
+    pub max_iterations: u16,
+    /// Tolerance on the complementarity residual, dimensionless (a path error over the largest
+    /// offset, a tension over the tension that bends the rod a radian). The iteration goes on to
+    /// the rounding floor while it still improves; an answer must at least meet this.
+    pub tolerance: T,
+}
+
+impl<T: Scalar> Default for DisplacementSettings<T> {
+    fn default() -> Self {
+        Self {
+            max_iterations: 40,
+            tolerance: default_tolerance::<T>() * T::lit(10.0),
+        }
+    }
+}
+
+/// Whether a tendon carries tension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TendonState {
+    /// Tension above zero, no slack.
+    Taut,
+    /// Zero tension: its path is shorter than its length.
+    Slack,
+}
+
+/// A displacement-controlled equilibrium.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisplacementSolve<T> {
+    /// The equilibrium at the tensions found (its `tensions_n` are the answer).
+    pub solved: TendonEquilibrium<T>,
+    /// Each tendon's slack, m (zero when taut).
+    pub slack_m: Vec<T, MAX_TENDONS>,
+    /// Each tendon's state.
+    pub states: Vec<TendonState, MAX_TENDONS>,
+    /// Why it stopped; only `Converged` with a successful `solved` is an answer.
+    pub termination: Termination,
+    /// Semi-smooth Newton iterations.
+    pub iterations: u16,
+    /// Sweeps spent, forward solves and sensitivities together.
+    pub sweeps: u32,
+}
+
+impl<T: Scalar> DisplacementSolve<T> {
+    /// Whether the tensions are an answer.
+    pub fn is_success(&self) -> bool {
+        self.termination.is_success() && self.solved.is_success()
+    }
+}
+
+/// `(a + b - sqrt(a^2 + b^2))` and its partial derivatives (at the kink, those of the smooth part
+/// along `a = b`).
+fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
+    let r = (a * a + b * b).sqrt();
+    if r > T::zero() {
+        (a + b - r, T::one() - a / r, T::one() - b / r)
+    } else {
+        let half = T::one() - T::lit(core::f64::consts::FRAC_1_SQRT_2);
+        (T::zero(), half, half)
+    }
+}
+
+impl<T: Scalar> Tendons<T> {
+    /// The slack `phi_j`, m, of each tendon at tensions `tau` with paths `path` after spool
+    /// displacements `d`.
+    pub(crate) fn slack(
+        &self,
+        displacements_m: &[T],
+        tensions_n: &[T],
+        path_m: &[T],
+    ) -> [T; MAX_TENDONS] {
+        let mut out = [T::zero(); MAX_TENDONS];
+        for (j, phi) in out.iter_mut().enumerate().take(self.len()) {
+            let (Some(t), Some(d), Some(tau), Some(path), Some(rest)) = (
+                self.tendons.get(j),
+                displacements_m.get(j),
+                tensions_n.get(j),
+                path_m.get(j),
+                self.rest_length_m(j),
+            ) else {
+                continue;
+            };
+            let unstretched = t.feed_length_m + rest - *d;
+            let stretch = t
+                .axial_stiffness_n
+                .map_or(T::one(), |k| T::one() + *tau / k);
+            *phi = unstretched * stretch - t.feed_length_m - *path;
+        }
+        out
+    }
+
+    /// `d phi_j / d tau_j` from the tendon's own stretch, m/N.
+    fn stretch_compliance(&self, displacements_m: &[T], j: usize) -> T {
+        let (Some(t), Some(d), Some(rest)) = (
+            self.tendons.get(j),
+            displacements_m.get(j),
+            self.rest_length_m(j),
+        ) else {
+            return T::zero();
+        };
+        t.axial_stiffness_n
+            .map_or(T::zero(), |k| (t.feed_length_m + rest - *d) / k)
+    }
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
+    /// Solves for the tensions that spool displacements `displacements_m` (m, one per tendon,
+    /// positive taken in from the straight unloaded rod's setting) produce, with each tendon's
+    /// compliance and slack, under the scene's dead loads and `load`.
+    ///
+    /// `start` may hold a previous equilibrium (its tensions start the iteration). Fails only on
+    /// invalid input; the outcome is data (`termination`).
+    pub fn solve_displacements(
+        &self,
+        tendons: &Tendons<T>,
+        displacements_m: &[T],
+        load: &TipLoad<T>,
+        start: Option<&TendonEquilibrium<T>>,
+        shooting: &ShootingSettings<T>,
+        settings: &DisplacementSettings<T>,
+    ) -> Result<DisplacementSolve<T>, ModelError> {
+        if displacements_m.len() != tendons.len() {
+            return Err(ModelError::Mismatch("displacements and tendons"));
+        }
+        for (j, d) in displacements_m.iter().enumerate() {
+            finite(*d, "tendon displacement")?;
+            let rest = tendons.rest_length_m(j).unwrap_or_else(T::zero);
+            let feed = tendons
+                .tendons
+                .get(j)
+                .map_or(T::zero(), |t| t.feed_length_m);
+            if *d >= rest + feed {
+                return Err(ModelError::OutOfRange(
+                    "tendon displacement (more than the tendon's whole length)",
+                ));
+            }
+        }
+        let count = tendons.len();
+        let tau_scale = tension_scale_n(self, tendons);
+        let radius = tendons
+            .routed
+            .iter()
+            .fold(T::zero(), |r, t| r.max(t.offset_m.norm()))
+            .max(self.length_m() * T::lit(1e-3));
+
+        // The rounding floor of the residual: a path resolved to a few `eps L`.
+        let floor = T::default_epsilon() * T::lit(8.0) * (self.length_m() / radius + T::one());
+        let mut tau = [T::zero(); MAX_TENDONS];
+        if let Some(s) = start {
+            for (t, s) in tau.iter_mut().zip(&s.tensions_n) {
+                *t = s.max(T::zero());
+            }
+        }
+        let mut sweeps = 0u32;
+        let mut current = self.solve_tendons(
+            tendons,
+            tau.get(..count).unwrap_or(&[]),
+            load,
+            start,
+            shooting,
+        )?;
+        sweeps += u32::from(current.equilibrium.report.sweeps);
+
+        let residual_of = |eq: &TendonEquilibrium<T>, tau: &[T; MAX_TENDONS]| {
+            let phi = tendons.slack(displacements_m, tau, &eq.path_m);
+            let mut r = SVector::<T, MAX_TENDONS>::zeros();
+            let mut parts = [(T::zero(), T::zero()); MAX_TENDONS];
+            for (((r, part), t), p) in r
+                .iter_mut()
+                .zip(parts.iter_mut())
+                .zip(tau)
+                .zip(&phi)
+                .take(count)
+            {
+                let (v, da, db) = fischer_burmeister(*t / tau_scale, *p / radius);
+                *r = v;
+                *part = (da, db);
+            }
+            (r, parts, phi)
+        };
+
+        let mut termination = Termination::IterationLimit;
+        let mut iterations = 0u16;
+        for _ in 0..settings.max_iterations {
+            if !current.is_success() {
+                termination = current.equilibrium.report.termination;
+                break;
+            }
+            let (r, parts, _) = residual_of(&current, &tau);
+            let size = r.amax();
+            if size <= floor {
+                termination = Termination::Converged;
+                break;
+            }
+            iterations += 1;
+            let sens = match sensitivity(self, tendons, &current, load, false, shooting)? {
+                Ok(s) => s,
+                Err(t) => {
+                    termination = t;
+                    break;
+                }
+            };
+            sweeps += sens.sweeps;
+            // d FB / d tau: d phi / d tau = stretch compliance - d path / d tau.
+            let compliance = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
+                tendons.stretch_compliance(displacements_m, j)
+            });
+            let jacobian = SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
+                if j >= count || i >= count {
+                    return if i == j { T::one() } else { T::zero() };
+                }
+                let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
+                let mut d_phi = -sens
+                    .d_path_d_tension
+                    .get((j, i))
+                    .copied()
+                    .unwrap_or_else(T::zero);
+                let mut d_tau = T::zero();
+                if i == j {
+                    d_phi += compliance.get(j).copied().unwrap_or_else(T::zero);
+                    d_tau = T::one();
+                }
+                da * d_tau / tau_scale + db * d_phi / radius
+            });
+            let Some(step) = jacobian.lu().solve(&(-r)) else {
+                termination = Termination::Singular;
+                break;
+            };
+            // Backtracking on |r|: the full step, then halves.
+            let mut accepted = false;
+            let mut alpha = T::one();
+            for _ in 0..12 {
+                let mut trial = tau;
+                for ((t, now), d) in trial.iter_mut().zip(&tau).zip(step.iter()).take(count) {
+                    *t = (*now + *d * alpha).max(T::zero());
+                }
+                let moved = self.solve_tendons(
+                    tendons,
+                    trial.get(..count).unwrap_or(&[]),
+                    load,
+                    Some(&current),
+                    shooting,
+                )?;
+                sweeps += u32::from(moved.equilibrium.report.sweeps);
+                if moved.is_success() {
+                    let (r_trial, _, _) = residual_of(&moved, &trial);
+                    if r_trial.amax() < size {
+                        tau = trial;
+                        current = moved;
+                        accepted = true;
+                        break;
+                    }
+                }
+                alpha *= T::lit(0.5);
+            }
+            if !accepted {
+                // At the floor of the forward solves' rounding: an answer if within tolerance.
+                termination = if size <= settings.tolerance {
+                    Termination::Converged
+                } else {
+                    Termination::Stalled
+                };
+                break;
+            }
+        }
+        let (r, _, phi) = residual_of(&current, &tau);
+        if termination == Termination::IterationLimit
+            && current.is_success()
+            && r.amax() <= settings.tolerance
+        {
+            termination = Termination::Converged;
+        }
+        let mut slack_m = Vec::new();
+        let mut states = Vec::new();
+        for (t, p) in tau.iter().zip(&phi).take(count) {
+            let slack = *t <= T::zero();
+            // Cannot overflow: at most MAX_TENDONS.
+            let _ = slack_m.push(if slack { p.max(T::zero()) } else { T::zero() });
+            let _ = states.push(if slack {
+                TendonState::Slack
+            } else {
+                TendonState::Taut
+            });
+        }
+        Ok(DisplacementSolve {
+            solved: current,
+            slack_m,
+            states,
+            termination,
+            iterations,
+            sweeps,
+        })
+    }
+}

@@ -1,0 +1,190 @@
+//! Tendons that pull: cables whose tension bends the backbone (MODEL.md §6).
+//!
+//! A tendon runs in straight chords from its fixed hole in the base plate (`s = 0`, not part of the
+//! rod) through the hole at the same body offset in every guide up to the guide where it terminates.
+//! Frictionless, with one tension along its whole length, it pulls each guide's hole toward both
+//! neighbouring holes, and its termination toward the previous one: point forces at the holes and
+//! their moments about the backbone (`guide_force.rs`). Those forces read the shape, including the
+//! next guide's pose, so the rod equations with the internal force as state carry them with an
+//! implicit jump at each guide (`crate::ode` `tendon.rs`).
+//!
+//! | concept | file |
+//! | --- | --- |
+//! | a tendon's routing and its compliance; a validated set of tendons | here |
+//! | the chord forces at a guide and their linearisation | `guide_force.rs` |
+//! | path lengths from the guides' poses | `paths.rs` |
+//! | the forward solve from tensions | `forward.rs` |
+//! | how paths and tip move with tensions and tip force | `sensitivity.rs` |
+//! | the forward solve from spool displacements: compliance and slack | `actuation.rs` |
+
+mod actuation;
+mod forward;
+pub(crate) mod guide_force;
+mod paths;
+mod sensitivity;
+
+pub use actuation::{DisplacementSettings, DisplacementSolve, TendonState};
+pub use forward::TendonEquilibrium;
+
+use heapless::Vec;
+use nalgebra::{Vector2, Vector3};
+
+use crate::Scalar;
+use crate::error::{ModelError, finite, non_negative, positive};
+use crate::kinematics::Attitude;
+use crate::model::Model;
+
+/// Most tendons (three per section on four sections).
+pub const MAX_TENDONS: usize = 12;
+
+/// One tendon: its hole in every guide, where it ends, and what lies between the spool and the base
+/// plate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tendon<T> {
+    /// The hole in each guide's cross-section (and in the base plate), local frame `(x, y)`, m.
+    pub hole_m: Vector2<T>,
+    /// Arc length of the guide where it terminates, m (must be a guide's centre).
+    pub end_m: T,
+    /// Axial stiffness `E_t A_t` of the tendon, N; `None` for an inextensible tendon.
+    pub axial_stiffness_n: Option<T>,
+    /// Free length from the spool to the base plate's hole, m (it stretches under tension too).
+    pub feed_length_m: T,
+}
+
+impl<T: Scalar> Tendon<T> {
+    /// An inextensible tendon whose hole is `radius_m` from the backbone at `angle_rad` about the
+    /// local z axis, from local x, ending at the guide at `end_m`.
+    pub fn at_angle(angle_rad: T, radius_m: T, end_m: T) -> Self {
+        let (s, c) = angle_rad.sin_cos();
+        Self {
+            hole_m: Vector2::new(c, s) * radius_m,
+            end_m,
+            axial_stiffness_n: None,
+            feed_length_m: T::zero(),
+        }
+    }
+
+    /// The hole's offset in the local frame, m.
+    pub fn offset_local_m(&self) -> Vector3<T> {
+        Vector3::new(self.hole_m.x, self.hole_m.y, T::zero())
+    }
+}
+
+/// A tendon checked against a model: its offset and the index of its termination guide.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Routed<T> {
+    pub offset_m: Vector3<T>,
+    pub end_guide: usize,
+}
+
+/// The tendons of one model, checked against its guides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tendons<T> {
+    tendons: Vec<Tendon<T>, MAX_TENDONS>,
+    pub(crate) routed: Vec<Routed<T>, MAX_TENDONS>,
+    /// Arc length of every guide, m (the routing's copy, so that lengths need no model).
+    pub(crate) guide_s_m: Vec<T, { crate::MAX_GUIDES }>,
+}
+
+impl<T: Scalar> Tendons<T> {
+    /// Checks `tendons` against `model`: at least one, at most [`MAX_TENDONS`]; each ends at a guide
+    /// (within a micrometre of its centre); the first guide lies distal of the base plate; offsets,
+    /// stiffnesses and feed lengths finite and in range.
+    pub fn new<A: Attitude<T>, const NODES: usize>(
+        model: &Model<T, A, NODES>,
+        tendons: &[Tendon<T>],
+    ) -> Result<Self, ModelError> {
+        if tendons.is_empty() {
+            return Err(ModelError::Empty("tendons"));
+        }
+        if tendons.len() > MAX_TENDONS {
+            return Err(ModelError::Capacity("tendons"));
+        }
+        let guides = &model.rod().guides;
+        let first = guides
+            .first()
+            .ok_or(ModelError::Empty("guides (tendons need at least one)"))?;
+        if first.s_m <= T::zero() {
+            return Err(ModelError::OutOfRange(
+                "first guide (a tendon's first chord starts at the base plate, s = 0)",
+            ));
+        }
+        let mut out = Self {
+            tendons: Vec::new(),
+            routed: Vec::new(),
+            guide_s_m: Vec::new(),
+        };
+        let mut previous = T::zero();
+        for guide in guides {
+            if guide.s_m <= previous {
+                return Err(ModelError::Unordered(
+                    "guides (tendon holes need distinct guides)",
+                ));
+            }
+            previous = guide.s_m;
+            out.guide_s_m
+                .push(guide.s_m)
+                .map_err(|_| ModelError::Capacity("guides"))?;
+        }
+        let tol = T::lit(1e-6);
+        for tendon in tendons {
+            finite(tendon.hole_m.x, "tendon hole")?;
+            finite(tendon.hole_m.y, "tendon hole")?;
+            finite(tendon.end_m, "tendon termination")?;
+            non_negative(tendon.feed_length_m, "tendon feed length")?;
+            if let Some(k) = tendon.axial_stiffness_n {
+                positive(k, "tendon axial stiffness")?;
+            }
+            let end_guide = guides
+                .iter()
+                .position(|g| (g.s_m - tendon.end_m).abs() <= tol)
+                .ok_or(ModelError::OutOfRange(
+                    "tendon termination (no guide centred there)",
+                ))?;
+            out.tendons
+                .push(*tendon)
+                .map_err(|_| ModelError::Capacity("tendons"))?;
+            out.routed
+                .push(Routed {
+                    offset_m: tendon.offset_local_m(),
+                    end_guide,
+                })
+                .map_err(|_| ModelError::Capacity("tendons"))?;
+        }
+        Ok(out)
+    }
+
+    /// The tendons, in the order given.
+    pub fn tendons(&self) -> &[Tendon<T>] {
+        &self.tendons
+    }
+
+    /// How many tendons.
+    pub fn len(&self) -> usize {
+        self.tendons.len()
+    }
+
+    /// Whether there are none (never, once built).
+    pub fn is_empty(&self) -> bool {
+        self.tendons.is_empty()
+    }
+
+    /// Each tendon's rest path length, m: the chords of the straight, unloaded rod, from the base
+    /// plate to its termination guide (its arc length).
+    pub fn rest_length_m(&self, tendon: usize) -> Option<T> {
+        let routed = self.routed.get(tendon)?;
+        self.guide_s_m.get(routed.end_guide).copied()
+    }
+
+    /// Checks tensions: one per tendon, each finite and not negative.
+    pub(crate) fn check_tensions(&self, tensions_n: &[T]) -> Result<[T; MAX_TENDONS], ModelError> {
+        if tensions_n.len() != self.len() {
+            return Err(ModelError::Mismatch("tensions and tendons"));
+        }
+        let mut out = [T::zero(); MAX_TENDONS];
+        for (o, t) in out.iter_mut().zip(tensions_n) {
+            *o = non_negative(*t, "tendon tension")?;
+        }
+        Ok(out)
+    }
+}
