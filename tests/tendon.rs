@@ -506,3 +506,133 @@ fn tendon_displacements_no_tension_can_explain_are_refused() {
     let out = run(&[0.05, 0.05, 0.05]).unwrap();
     assert!(!out.is_success(), "{:?}", out.solved.tensions_n);
 }
+
+use model_core::inverse::Determination;
+use model_core::{MeasuredTensions, TendonInverseSettings};
+
+/// The bench at known tensions and tip force, and the displacements it reads.
+fn truth(
+    tau: [f64; 3],
+    force: [f64; 3],
+) -> (Model<f64>, Tendons<f64>, TendonEquilibrium<f64>, Vec<f64>) {
+    let (rod, tendons) = reference::tendon_bench::<f64>(100).unwrap();
+    let (model, set, truth) = solve(rod, &tendons, &tau, force);
+    let d = displacements_of(&set, &truth);
+    (model, set, truth, d)
+}
+
+/// Intrinsic force sensing: with the tensions measured too (motor current, 10 mN), the tip force
+/// is observable and comes back within its reported uncertainty, and so do the tensions.
+#[test]
+fn tendon_inverse_with_tension_sensing_finds_the_tip_force() {
+    let inverse = TendonInverseSettings::default();
+    for (tau, force) in [
+        ([3.0, 1.5, 0.5], [0.0, -0.1, 0.05]),
+        ([1.0, 2.5, 2.0], [0.05, 0.1, -0.1]),
+    ] {
+        let (model, set, truth_eq, d) = truth(tau, force);
+        let std = [0.01; 3];
+        let measured = MeasuredTensions {
+            tensions_n: &tau,
+            std_n: &std,
+        };
+        let est = model
+            .estimate_tendons(&set, &d, Some(measured), None, &settings(), &inverse)
+            .unwrap();
+        assert!(est.is_success(), "{:?}", est.termination);
+        let q = &est.quality;
+        assert!(q.force_observable);
+        for (i, want) in force.iter().enumerate() {
+            let off = (est.force_n()[i] - want).abs();
+            assert!(
+                off < 3.0 * q.force_std_n[i] + 1e-9,
+                "{tau:?}: force {i} {off:e} off, std {:e}",
+                q.force_std_n[i]
+            );
+        }
+        for (j, t) in est.solved.tensions_n.iter().enumerate() {
+            assert!((t - tau[j]).abs() < 3.0 * q.tension_std_n[j] + 1e-9);
+        }
+        let tip =
+            (est.solved.equilibrium.tip_position_m - truth_eq.equilibrium.tip_position_m).norm();
+        assert!(tip < 3.0 * q.tip_std_m.norm() + 1e-9, "tip {tip:e}");
+        assert!(
+            matches!(
+                q.determination,
+                Determination::Determined | Determination::Weak
+            ),
+            "{:?}",
+            q.determination
+        );
+        eprintln!(
+            "{tau:?} {force:?}: force {:?} std {:?} {:?}",
+            est.force_n(),
+            q.force_std_n,
+            q.determination
+        );
+    }
+}
+
+/// From displacements alone a tip force is not observable (three data, six unknowns): the verdict
+/// says so rather than guessing.
+#[test]
+fn tendon_inverse_from_displacements_alone_says_the_force_is_undetermined() {
+    let (model, set, _, d) = truth([3.0, 1.5, 0.5], [0.0, -0.1, 0.05]);
+    let est = model
+        .estimate_tendons(
+            &set,
+            &d,
+            None,
+            None,
+            &settings(),
+            &TendonInverseSettings::default(),
+        )
+        .unwrap();
+    assert!(est.is_success(), "{:?}", est.termination);
+    assert!(!est.quality.force_observable);
+    assert_eq!(est.quality.determination, Determination::Undetermined);
+    // With no tip force at all, the tensions the displacements imply come back exactly.
+    let (model, set, _, d) = truth([3.0, 1.5, 0.5], [0.0; 3]);
+    let est = model
+        .estimate_tendons(
+            &set,
+            &d,
+            None,
+            None,
+            &settings(),
+            &TendonInverseSettings::default(),
+        )
+        .unwrap();
+    for (t, want) in est.solved.tensions_n.iter().zip([3.0, 1.5, 0.5]) {
+        assert!((t - want).abs() < 1e-4, "{t} vs {want}");
+    }
+    assert_eq!(est.quality.determination, Determination::Undetermined);
+}
+
+/// Displacements no load explains (every spool taken in by 5 cm): never a converged, determined
+/// answer.
+#[test]
+fn tendon_inverse_of_impossible_displacements_is_not_an_answer() {
+    let (model, set, _, _) = truth([1.0, 1.0, 1.0], [0.0; 3]);
+    let std = [0.01; 3];
+    let tau = [1.0; 3];
+    let est = model
+        .estimate_tendons(
+            &set,
+            &[0.05, 0.05, 0.05],
+            Some(MeasuredTensions {
+                tensions_n: &tau,
+                std_n: &std,
+            }),
+            None,
+            &settings(),
+            &TendonInverseSettings::default(),
+        )
+        .unwrap();
+    assert!(
+        !est.is_success() || est.quality.determination == Determination::Inconsistent,
+        "{:?} {:?}",
+        est.termination,
+        est.quality.determination
+    );
+}

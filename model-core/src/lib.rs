@@ -79,8 +79,8 @@ pub use shape::ShapePoint;
 pub use shooting::{Equilibrium, Evaluation, ShootingSettings, Start};
 pub use stability::Stability;
 pub use tendon::{
-    DisplacementSettings, DisplacementSolve, MAX_TENDONS, Tendon, TendonEquilibrium, TendonState,
-    Tendons,
+    DisplacementSettings, DisplacementSolve, MAX_TENDONS, MeasuredTensions, Tendon,
+    TendonEquilibrium, TendonEstimate, TendonInverseSettings, TendonQuality, TendonState, Tendons,
 };
 
 /// Most sections in a rod.

@@ -82,6 +82,32 @@ pub struct Evaluation<T> {
 /// The base of an equilibrium: strain (1/m, body), internal force (N) and moment (N m), global.
 pub(crate) type Base<T> = (Vector3<T>, Vector3<T>, Vector3<T>);
 
+/// An equilibrium with no solve to show, ended by `termination`: zeros, an identity frame, and a
+/// residual that is not a number (rather than a zero that reads as exact).
+pub(crate) fn failed_equilibrium<T: Scalar>(
+    load: &TipLoad<T>,
+    termination: Termination,
+) -> Equilibrium<T> {
+    Equilibrium {
+        base_strain_per_m: Vector3::zeros(),
+        base_force_n: Vector3::zeros(),
+        base_moment_nm: Vector3::zeros(),
+        load: *load,
+        tip_position_m: Vector3::zeros(),
+        tip_rotation: Matrix3::identity(),
+        cable_lengths_m: Vec::new(),
+        report: SolveReport {
+            termination,
+            iterations: 0,
+            sweeps: 0,
+            residual: T::lit(f64::NAN),
+            load_steps: 0,
+            stability: Stability::Unchecked,
+            phase_per_step_rad: T::zero(),
+        },
+    }
+}
+
 /// The equilibrium a solve ended with; `base` maps the unknowns to the base's strain, force, moment.
 pub(crate) fn equilibrium<T: Scalar, const K: usize>(
     load: &TipLoad<T>,
@@ -92,25 +118,11 @@ pub(crate) fn equilibrium<T: Scalar, const K: usize>(
     let solved = match outcome {
         Ok(solved) => solved,
         Err(failed) => {
-            return Equilibrium {
-                base_strain_per_m: Vector3::zeros(),
-                base_force_n: Vector3::zeros(),
-                base_moment_nm: Vector3::zeros(),
-                load: *load,
-                tip_position_m: Vector3::zeros(),
-                tip_rotation: Matrix3::identity(),
-                cable_lengths_m: Vec::new(),
-                report: SolveReport {
-                    termination: Termination::ContinuationFailed,
-                    iterations: failed.work.iterations,
-                    sweeps: failed.work.sweeps,
-                    // No iterate to measure: not a number, rather than a zero that reads as exact.
-                    residual: T::lit(f64::NAN),
-                    load_steps: failed.load_steps,
-                    stability: Stability::Unchecked,
-                    phase_per_step_rad: T::zero(),
-                },
-            };
+            let mut eq = failed_equilibrium(load, Termination::ContinuationFailed);
+            eq.report.iterations = failed.work.iterations;
+            eq.report.sweeps = failed.work.sweeps;
+            eq.report.load_steps = failed.load_steps;
+            return eq;
         }
     };
     let outcome = &solved.newton;

@@ -16,15 +16,18 @@
 //! | the forward solve from tensions | `forward.rs` |
 //! | how paths and tip move with tensions and tip force | `sensitivity.rs` |
 //! | the forward solve from spool displacements: compliance and slack | `actuation.rs` |
+//! | the inverse: tensions, tip force and shape from displacements (and tensions) | `inverse.rs` |
 
 mod actuation;
 mod forward;
 pub(crate) mod guide_force;
+mod inverse;
 mod paths;
 mod sensitivity;
 
 pub use actuation::{DisplacementSettings, DisplacementSolve, TendonState};
 pub use forward::TendonEquilibrium;
+pub use inverse::{MeasuredTensions, TendonEstimate, TendonInverseSettings, TendonQuality};
 
 use heapless::Vec;
 use nalgebra::{Vector2, Vector3};

@@ -1,0 +1,872 @@
+//! The inverse for tendon-driven robots (MODEL.md §6.4): from the spool encoders' displacements,
+//! and optionally measured tensions (motor current, each with its own standard deviation), the
+//! tensions, an external tip force and the shape, with the posterior uncertainty and a verdict.
+//!
+//! Unknowns `theta = (tau_1 .. tau_n, F)`, `tau >= 0`. Each evaluation solves the shape for `theta`
+//! (warm), so the fit moves on the equilibrium manifold. Whitened residuals:
+//!
+//! - each taut tendon's displacement, `(d_hat(theta) - d) / s_d`, with
+//!   `d_hat = U0 - (feed + path) / (1 + tau / E_t A_t)` (`actuation.rs`); a tendon at zero tension
+//!   whose spool took in less than its path needs is slack, consistent whatever the slack: no residual;
+//! - each measured tension, `(tau - tau_measured) / s_tau`;
+//! - the prior on the tip force, `F / s_F`.
+//!
+//! A projected Levenberg-Marquardt minimises their squares with `tau` kept non-negative; Jacobians
+//! come from `sensitivity.rs`. The posterior covariance is the inverse of the whitened information
+//! (from the SVD of the stacked system, not the normal matrix). What the data alone determine comes
+//! from the data rows alone: with displacements only there are `n` data for `n + 3` unknowns, so the
+//! tip force is not observable and the verdict says [`Determination::Undetermined`], whatever the
+//! prior makes of it; with tensions measured too it becomes observable (intrinsic force sensing).
+//! After a fit the search for other answers restarts from tip forces of a few buckling scales along
+//! each axis: another fit as good and far from the answer makes it [`Determination::Ambiguous`].
+
+use heapless::Vec;
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use super::sensitivity::sensitivity;
+use super::{DisplacementSettings, MAX_TENDONS, TendonEquilibrium, TendonState, Tendons};
+use crate::Scalar;
+use crate::error::{ModelError, finite, positive};
+use crate::inverse::Determination;
+use crate::kinematics::Attitude;
+use crate::loads::TipLoad;
+use crate::model::Model;
+use crate::report::Termination;
+use crate::shooting::ShootingSettings;
+
+/// Most unknowns: every tension and three force components.
+const MAX_UNKNOWNS: usize = MAX_TENDONS + 3;
+/// Most whitened rows: displacements, tensions, the force prior.
+const MAX_ROWS: usize = 2 * MAX_TENDONS + 3;
+
+type Theta<T> = SVector<T, MAX_UNKNOWNS>;
+type Rows<T> = SVector<T, MAX_ROWS>;
+type Jacobian<T> = SMatrix<T, MAX_ROWS, MAX_UNKNOWNS>;
+/// The whitened Jacobian and the tip's change with the unknowns.
+type Linear<T> = (Jacobian<T>, SMatrix<T, 3, MAX_UNKNOWNS>);
+
+/// Settings of the tendon inverse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TendonInverseSettings<T> {
+    /// Levenberg-Marquardt iterations per fit.
+    pub max_iterations: u16,
+    /// Standard deviation of one spool displacement, m (an encoder of resolution `q`: `q / sqrt 12`).
+    pub displacement_std_m: T,
+    /// The model's own error in a tendon path, m, added in quadrature.
+    pub model_length_std_m: T,
+    /// A priori standard deviation of each tip force component, N.
+    pub force_prior_std_n: T,
+    /// A tip force component with a larger posterior standard deviation makes the estimate
+    /// [`Determination::Weak`], N.
+    pub max_force_std_n: T,
+    /// A tension with a larger posterior standard deviation makes it [`Determination::Weak`], N.
+    pub max_tension_std_n: T,
+    /// How far the search for other answers restarts, in buckling scales `E I / L^2` of tip force
+    /// (zero: no search, and a fit that would be `Determined` is `Unverified`).
+    pub scan_reach: T,
+}
+
+impl<T: Scalar> Default for TendonInverseSettings<T> {
+    fn default() -> Self {
+        Self {
+            max_iterations: 40,
+            displacement_std_m: T::lit(2.2e-6),
+            model_length_std_m: T::zero(),
+            force_prior_std_n: T::lit(1.0),
+            max_force_std_n: T::lit(0.05),
+            max_tension_std_n: T::lit(0.05),
+            scan_reach: T::lit(3.0),
+        }
+    }
+}
+
+impl<T: Scalar> TendonInverseSettings<T> {
+    fn validate(&self) -> Result<(), ModelError> {
+        positive(self.displacement_std_m, "displacement standard deviation")?;
+        crate::error::non_negative(self.model_length_std_m, "model length standard deviation")?;
+        positive(self.force_prior_std_n, "force prior standard deviation")?;
+        positive(self.max_force_std_n, "force standard deviation limit")?;
+        positive(self.max_tension_std_n, "tension standard deviation limit")?;
+        crate::error::non_negative(self.scan_reach, "scan reach")?;
+        Ok(())
+    }
+}
+
+/// Measured tensions: each value, N, with its standard deviation, N.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeasuredTensions<'a, T> {
+    /// One per tendon, N.
+    pub tensions_n: &'a [T],
+    /// One per tendon, N (positive).
+    pub std_n: &'a [T],
+}
+
+/// What the measurements say about the estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TendonQuality<T> {
+    /// Posterior standard deviation of each tension, N.
+    pub tension_std_n: Vec<T, MAX_TENDONS>,
+    /// Posterior standard deviation of the tip force components, N (with the prior).
+    pub force_std_n: Vector3<T>,
+    /// Standard deviation of the tip position components, m.
+    pub tip_std_m: Vector3<T>,
+    /// Rms of the whitened data residuals (displacements and tensions).
+    pub residual_rms_sigma: T,
+    /// Whether the data alone determine the tip force (rank of the data rows).
+    pub force_observable: bool,
+    /// The verdict on the whole estimate (tensions and tip force).
+    pub determination: Determination,
+    /// The verdict on the tensions alone.
+    pub tension_determination: Determination,
+}
+
+/// An estimate of the tensions, the tip force and the shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TendonEstimate<T> {
+    /// The equilibrium at the estimate (its `tensions_n`, its `equilibrium.load` the tip force).
+    pub solved: TendonEquilibrium<T>,
+    /// Each tendon's state.
+    pub states: Vec<TendonState, MAX_TENDONS>,
+    /// Why the fit stopped; use the estimate only when it is `Converged`.
+    pub termination: Termination,
+    /// Iterations of the fit that gave the answer.
+    pub iterations: u16,
+    /// Sweeps spent, the search included.
+    pub sweeps: u32,
+    /// How well the data determine it.
+    pub quality: TendonQuality<T>,
+}
+
+impl<T: Scalar> TendonEstimate<T> {
+    /// Whether the estimate is an answer (converged); how far to trust it is `quality.determination`.
+    pub fn is_success(&self) -> bool {
+        self.termination.is_success() && self.solved.is_success()
+    }
+
+    /// The estimated tip force, N.
+    pub fn force_n(&self) -> Vector3<T> {
+        self.solved.equilibrium.load.force_n
+    }
+}
+
+/// One fit's state: the unknowns, the equilibrium there, and its whitened residuals.
+struct Fit<T> {
+    theta: Theta<T>,
+    solved: TendonEquilibrium<T>,
+    rows: Rows<T>,
+    /// Rows in use: which are active (a slack tendon's displacement row is not).
+    active: [bool; MAX_ROWS],
+}
+
+struct Problem<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
+    model: &'a Model<T, A, NODES>,
+    tendons: &'a Tendons<T>,
+    displacements_m: &'a [T],
+    measured: Option<MeasuredTensions<'a, T>>,
+    settings: TendonInverseSettings<T>,
+    shooting: ShootingSettings<T>,
+    count: usize,
+    /// Displacement standard deviation with the model's error, m.
+    s_d: T,
+    sweeps: u32,
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
+    fn unknowns(&self) -> usize {
+        self.count + 3
+    }
+
+    fn tensions(&self, theta: &Theta<T>) -> [T; MAX_TENDONS] {
+        let mut tau = [T::zero(); MAX_TENDONS];
+        for (t, v) in tau.iter_mut().zip(theta.iter()).take(self.count) {
+            *t = *v;
+        }
+        tau
+    }
+
+    fn load(&self, theta: &Theta<T>) -> TipLoad<T> {
+        let f = |i: usize| theta.get(self.count + i).copied().unwrap_or_else(T::zero);
+        TipLoad::force(Vector3::new(f(0), f(1), f(2)))
+    }
+
+    /// The displacement a taut tendon `j` reads at tension `tau` and path `path`, and its change
+    /// with `tau` at fixed path and with the path.
+    fn predicted(&self, j: usize, tau: T, path: T) -> (T, T, T) {
+        let (Some(t), Some(rest)) = (self.tendons.tendons().get(j), self.tendons.rest_length_m(j))
+        else {
+            return (T::zero(), T::zero(), T::zero());
+        };
+        let spanned = t.feed_length_m + path;
+        match t.axial_stiffness_n {
+            Some(k) => {
+                let stretch = T::one() + tau / k;
+                (
+                    t.feed_length_m + rest - spanned / stretch,
+                    spanned / (k * stretch * stretch),
+                    -T::one() / stretch,
+                )
+            }
+            None => (rest - path, T::zero(), -T::one()),
+        }
+    }
+
+    /// Solves the shape at `theta` (warm from `near`) and its residuals.
+    fn evaluate(
+        &mut self,
+        theta: &Theta<T>,
+        near: Option<&TendonEquilibrium<T>>,
+    ) -> Result<Option<Fit<T>>, ModelError> {
+        let tau = self.tensions(theta);
+        let solved = self.model.solve_tendons(
+            self.tendons,
+            tau.get(..self.count).unwrap_or(&[]),
+            &self.load(theta),
+            near,
+            &self.shooting,
+        )?;
+        self.sweeps += u32::from(solved.equilibrium.report.sweeps);
+        if !solved.is_success() {
+            return Ok(None);
+        }
+        let mut rows = Rows::zeros();
+        let mut active = [false; MAX_ROWS];
+        for j in 0..self.count {
+            let (Some(d), Some(path), Some(t)) = (
+                self.displacements_m.get(j),
+                solved.path_m.get(j),
+                tau.get(j),
+            ) else {
+                continue;
+            };
+            let (d_hat, _, _) = self.predicted(j, *t, *path);
+            // Slack: no tension, and the spool took in less than the path needs.
+            let slack = *t <= T::zero() && *d <= d_hat;
+            if let (Some(r), Some(a)) = (rows.get_mut(j), active.get_mut(j)) {
+                *r = if slack {
+                    T::zero()
+                } else {
+                    (d_hat - *d) / self.s_d
+                };
+                *a = !slack;
+            }
+        }
+        if let Some(m) = self.measured {
+            for j in 0..self.count {
+                let (Some(v), Some(s), Some(t)) = (m.tensions_n.get(j), m.std_n.get(j), tau.get(j))
+                else {
+                    continue;
+                };
+                if let (Some(r), Some(a)) =
+                    (rows.get_mut(self.count + j), active.get_mut(self.count + j))
+                {
+                    *r = (*t - *v) / *s;
+                    *a = true;
+                }
+            }
+        }
+        let prior = 2 * self.count;
+        let force = self.load(theta).force_n;
+        for i in 0..3 {
+            if let (Some(r), Some(a), Some(f)) = (
+                rows.get_mut(prior + i),
+                active.get_mut(prior + i),
+                force.get(i),
+            ) {
+                *r = *f / self.settings.force_prior_std_n;
+                *a = true;
+            }
+        }
+        Ok(Some(Fit {
+            theta: *theta,
+            solved,
+            rows,
+            active,
+        }))
+    }
+
+    /// The whitened Jacobian at `fit` (inactive rows zero), and the tip's change with `theta`.
+    fn jacobian(
+        &mut self,
+        fit: &Fit<T>,
+    ) -> Result<Result<Linear<T>, Termination>, ModelError> {
+        let load = self.load(&fit.theta);
+        let sens = match sensitivity(
+            self.model,
+            self.tendons,
+            &fit.solved,
+            &load,
+            true,
+            &self.shooting,
+        )? {
+            Ok(s) => s,
+            Err(t) => return Ok(Err(t)),
+        };
+        self.sweeps += sens.sweeps;
+        let count = self.count;
+        let tau = self.tensions(&fit.theta);
+        let mut jac = Jacobian::zeros();
+        let mut d_tip = SMatrix::<T, 3, MAX_UNKNOWNS>::zeros();
+        for c in 0..self.unknowns() {
+            for j in 0..count {
+                if !fit.active.get(j).copied().unwrap_or(false) {
+                    continue;
+                }
+                let path = fit.solved.path_m.get(j).copied().unwrap_or_else(T::zero);
+                let t = tau.get(j).copied().unwrap_or_else(T::zero);
+                let (_, d_tau, d_path) = self.predicted(j, t, path);
+                let dp = if c < count {
+                    sens.d_path_d_tension.get((j, c)).copied()
+                } else {
+                    sens.d_path_d_force.get((j, c - count)).copied()
+                }
+                .unwrap_or_else(T::zero);
+                let own = if c == j { d_tau } else { T::zero() };
+                if let Some(e) = jac.get_mut((j, c)) {
+                    *e = (own + d_path * dp) / self.s_d;
+                }
+            }
+            if let Some(m) = self.measured
+                && c < count
+                && let (Some(s), Some(e)) = (m.std_n.get(c), jac.get_mut((count + c, c)))
+            {
+                *e = T::one() / *s;
+            }
+            if c >= count
+                && let Some(e) = jac.get_mut((2 * count + (c - count), c))
+            {
+                *e = T::one() / self.settings.force_prior_std_n;
+            }
+            for i in 0..3 {
+                let v = if c < count {
+                    sens.d_tip_d_tension.get((i, c)).copied()
+                } else {
+                    sens.d_tip_d_force.get((i, c - count)).copied()
+                }
+                .unwrap_or_else(T::zero);
+                if let Some(e) = d_tip.get_mut((i, c)) {
+                    *e = v;
+                }
+            }
+        }
+        Ok(Ok((jac, d_tip)))
+    }
+
+    fn cost(fit: &Fit<T>) -> T {
+        fit.rows.norm_squared()
+    }
+}
+
+/// A fit's outcome: where it ended, why, after how many iterations, and its linearisation there.
+struct Outcome<T> {
+    fit: Fit<T>,
+    termination: Termination,
+    iterations: u16,
+    linear: Option<Linear<T>>,
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
+    /// The step below which a fit has converged, in standard deviations of the fit: what the
+    /// forward differences resolve in the scalar type.
+    fn step_tolerance_sigma() -> T {
+        (T::default_epsilon() * T::lit(1e4)).max(T::lit(1e-5))
+    }
+
+    /// Projected Levenberg-Marquardt from `fit`.
+    fn fit(&mut self, mut fit: Fit<T>) -> Result<Outcome<T>, ModelError> {
+        let n = self.unknowns();
+        let mut mu = T::lit(1e-3);
+        let mut iterations = 0u16;
+        for _ in 0..self.settings.max_iterations {
+            let (jac, d_tip) = match self.jacobian(&fit)? {
+                Ok(j) => j,
+                Err(t) => {
+                    return Ok(Outcome {
+                        fit,
+                        termination: t,
+                        iterations,
+                        linear: None,
+                    });
+                }
+            };
+            let g = jac.tr_mul(&fit.rows);
+            let h = jac.tr_mul(&jac);
+            let cost = Problem::<T, A, NODES>::cost(&fit);
+            let mut accepted = None;
+            for _ in 0..12 {
+                let damped = SMatrix::<T, MAX_UNKNOWNS, MAX_UNKNOWNS>::from_fn(|r, c| {
+                    if r >= n || c >= n {
+                        return if r == c { T::one() } else { T::zero() };
+                    }
+                    let v = h.get((r, c)).copied().unwrap_or_else(T::zero);
+                    if r == c {
+                        v + mu * v.max(T::default_epsilon())
+                    } else {
+                        v
+                    }
+                });
+                let Some(step) = damped.cholesky().map(|c| c.solve(&(-g))) else {
+                    mu *= T::lit(10.0);
+                    continue;
+                };
+                let mut theta = fit.theta + step;
+                for t in theta.iter_mut().take(self.count) {
+                    *t = t.max(T::zero());
+                }
+                let moved = theta - fit.theta;
+                // The step's size in standard deviations of the fit.
+                let predicted = (jac * moved).norm();
+                if predicted <= Self::step_tolerance_sigma() {
+                    return Ok(Outcome {
+                        fit,
+                        termination: Termination::Converged,
+                        iterations,
+                        linear: Some((jac, d_tip)),
+                    });
+                }
+                match self.evaluate(&theta, Some(&fit.solved))? {
+                    Some(trial) if Problem::<T, A, NODES>::cost(&trial) < cost => {
+                        accepted = Some(trial);
+                        mu = (mu / T::lit(3.0)).max(T::lit(1e-9));
+                        break;
+                    }
+                    _ => mu *= T::lit(10.0),
+                }
+            }
+            iterations += 1;
+            match accepted {
+                Some(next) => fit = next,
+                None => {
+                    return Ok(Outcome {
+                        fit,
+                        termination: Termination::Stalled,
+                        iterations,
+                        linear: Some((jac, d_tip)),
+                    });
+                }
+            }
+        }
+        Ok(Outcome {
+            fit,
+            termination: Termination::IterationLimit,
+            iterations,
+            linear: None,
+        })
+    }
+
+    /// `jac` with a unit row for each unused unknown (so that its SVD sees only the used ones), and
+    /// the prior rows dropped when `data_only`.
+    fn padded(&self, jac: &Jacobian<T>, data_only: bool) -> Jacobian<T> {
+        let n = self.unknowns();
+        let prior = 2 * self.count;
+        let mut out = *jac;
+        if data_only {
+            for i in 0..3 {
+                out.row_mut(prior + i).fill(T::zero());
+            }
+        }
+        for c in n..MAX_UNKNOWNS {
+            if let Some(e) = out.get_mut((prior + 3 + (c - n), c)) {
+                *e = T::one();
+            }
+        }
+        out
+    }
+
+    /// The quality of the estimate at `fit` with whitened Jacobian `jac` and tip change `d_tip`.
+    fn quality(
+        &self,
+        fit: &Fit<T>,
+        jac: &Jacobian<T>,
+        d_tip: &SMatrix<T, 3, MAX_UNKNOWNS>,
+    ) -> TendonQuality<T> {
+        let n = self.unknowns();
+        let infinite = T::max_value().unwrap_or_else(|| T::lit(1e300));
+        let data_rows = 2 * self.count;
+        let (mut sum, mut used) = (T::zero(), 0usize);
+        for (r, a) in fit.rows.iter().zip(&fit.active).take(data_rows) {
+            if *a {
+                sum += *r * *r;
+                used += 1;
+            }
+        }
+        let residual_rms_sigma = if used > 0 {
+            (sum / T::lit(used as f64)).sqrt()
+        } else {
+            T::zero()
+        };
+        let mut quality = TendonQuality {
+            tension_std_n: Vec::new(),
+            force_std_n: Vector3::repeat(infinite),
+            tip_std_m: Vector3::repeat(infinite),
+            residual_rms_sigma,
+            force_observable: false,
+            determination: Determination::Undetermined,
+            tension_determination: Determination::Undetermined,
+        };
+        for _ in 0..self.count {
+            let _ = quality.tension_std_n.push(infinite);
+        }
+        if residual_rms_sigma > T::lit(3.0) {
+            quality.determination = Determination::Inconsistent;
+            quality.tension_determination = Determination::Inconsistent;
+        }
+        // What the data alone determine: the data rows' singular values.
+        let data = self.padded(jac, true).svd(false, false);
+        let largest = data.singular_values.max();
+        let threshold = largest * T::default_epsilon() * T::lit(1e3);
+        quality.force_observable =
+            largest > T::zero() && data.singular_values.iter().all(|s| *s > threshold);
+        // The posterior: data and prior, V diag(1 / sigma^2) V^T.
+        let svd = self.padded(jac, false).svd(false, true);
+        let Some(v_t) = svd.v_t else {
+            return quality;
+        };
+        if svd.singular_values.iter().any(|s| *s <= T::zero()) {
+            return quality;
+        }
+        let inv = svd.singular_values.map(|s| T::one() / (s * s));
+        let covariance =
+            v_t.transpose() * SMatrix::<T, MAX_UNKNOWNS, MAX_UNKNOWNS>::from_diagonal(&inv) * v_t;
+        let std = |i: usize| {
+            covariance
+                .get((i, i))
+                .map_or(infinite, |v| v.max(T::zero()).sqrt())
+        };
+        for (j, s) in quality.tension_std_n.iter_mut().enumerate() {
+            *s = std(j);
+        }
+        quality.force_std_n =
+            Vector3::new(std(self.count), std(self.count + 1), std(self.count + 2));
+        let tip_cov = d_tip * covariance * d_tip.transpose();
+        let floor = self.model.length_m() * crate::solve::stopping::default_tolerance::<T>();
+        quality.tip_std_m = tip_cov
+            .diagonal()
+            .map(|v| (v.max(T::zero()) + floor * floor).sqrt());
+        let _ = n;
+        if quality.determination == Determination::Inconsistent {
+            return quality;
+        }
+        let worst_tension = quality
+            .tension_std_n
+            .iter()
+            .fold(T::zero(), |a, b| a.max(*b));
+        quality.tension_determination = if worst_tension > self.settings.max_tension_std_n {
+            Determination::Weak
+        } else {
+            Determination::Determined
+        };
+        quality.determination = if !quality.force_observable {
+            Determination::Undetermined
+        } else if quality.force_std_n.max() > self.settings.max_force_std_n
+            || worst_tension > self.settings.max_tension_std_n
+        {
+            Determination::Weak
+        } else {
+            Determination::Determined
+        };
+        quality
+    }
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
+    /// Estimates the tensions, the tip force and the shape from spool displacements (m, one per
+    /// tendon, positive taken in; see [`Model::solve_displacements`]) and optionally measured
+    /// tensions, with the posterior uncertainty and a verdict.
+    ///
+    /// From `start` (a previous estimate: the per-tick warm update) the fit starts there and skips
+    /// the search for other answers, keeping the previous verdict's doubt. Fails only on invalid
+    /// input; the outcome is data.
+    pub fn estimate_tendons(
+        &self,
+        tendons: &Tendons<T>,
+        displacements_m: &[T],
+        measured: Option<MeasuredTensions<'_, T>>,
+        start: Option<&TendonEstimate<T>>,
+        shooting: &ShootingSettings<T>,
+        settings: &TendonInverseSettings<T>,
+    ) -> Result<TendonEstimate<T>, ModelError> {
+        settings.validate()?;
+        let count = tendons.len();
+        if displacements_m.len() != count {
+            return Err(ModelError::Mismatch("displacements and tendons"));
+        }
+        for (j, d) in displacements_m.iter().enumerate() {
+            finite(*d, "tendon displacement")?;
+            let rest = tendons.rest_length_m(j).unwrap_or_else(T::zero);
+            let feed = tendons
+                .tendons()
+                .get(j)
+                .map_or(T::zero(), |t| t.feed_length_m);
+            if *d >= rest + feed {
+                return Err(ModelError::OutOfRange(
+                    "tendon displacement (more than the tendon's whole length)",
+                ));
+            }
+        }
+        if let Some(m) = measured {
+            if m.tensions_n.len() != count || m.std_n.len() != count {
+                return Err(ModelError::Mismatch("measured tensions and tendons"));
+            }
+            for (t, s) in m.tensions_n.iter().zip(m.std_n) {
+                finite(*t, "measured tension")?;
+                positive(*s, "tension standard deviation")?;
+            }
+        }
+        let s_d = (settings.displacement_std_m * settings.displacement_std_m
+            + settings.model_length_std_m * settings.model_length_std_m)
+            .sqrt();
+        let mut problem = Problem {
+            model: self,
+            tendons,
+            displacements_m,
+            measured,
+            settings: *settings,
+            shooting: *shooting,
+            count,
+            s_d,
+            sweeps: 0,
+        };
+
+        // The start: the previous estimate, or the tensions the displacements give at no tip force
+        // (measured tensions where there are some).
+        let mut theta = Theta::zeros();
+        let mut near = None;
+        match start {
+            Some(previous) => {
+                for (t, v) in theta.iter_mut().zip(&previous.solved.tensions_n) {
+                    *t = v.max(T::zero());
+                }
+                for i in 0..3 {
+                    if let (Some(t), Some(f)) =
+                        (theta.get_mut(count + i), previous.force_n().get(i))
+                    {
+                        *t = *f;
+                    }
+                }
+                near = Some(&previous.solved);
+            }
+            None => match measured {
+                Some(m) => {
+                    for (t, v) in theta.iter_mut().zip(m.tensions_n) {
+                        *t = v.max(T::zero());
+                    }
+                }
+                None => {
+                    let d = self.solve_displacements(
+                        tendons,
+                        displacements_m,
+                        &TipLoad::zero(),
+                        None,
+                        shooting,
+                        &DisplacementSettings::default(),
+                    )?;
+                    problem.sweeps += d.sweeps;
+                    if d.is_success() {
+                        for (t, v) in theta.iter_mut().zip(&d.solved.tensions_n) {
+                            *t = *v;
+                        }
+                    }
+                }
+            },
+        }
+        let first = match problem.evaluate(&theta, near)? {
+            Some(f) => f,
+            None => match problem.evaluate(&theta, None)? {
+                Some(f) => f,
+                None => return Ok(problem.failed(&theta, Termination::ContinuationFailed)),
+            },
+        };
+        let outcome = problem.fit(first)?;
+        let mut best = problem.finish(outcome);
+        if !best.is_success() {
+            return Ok(best);
+        }
+        match start {
+            Some(previous) => {
+                let doubt = previous.quality.determination;
+                if matches!(doubt, Determination::Ambiguous | Determination::Unverified) {
+                    best.quality.determination = best.quality.determination.at_best(doubt);
+                }
+            }
+            None => problem.search(&mut best)?,
+        }
+        best.sweeps = problem.sweeps;
+        Ok(best)
+    }
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
+    /// An estimate that has no equilibrium to show.
+    fn failed(&self, theta: &Theta<T>, termination: Termination) -> TendonEstimate<T> {
+        let mut tensions = Vec::new();
+        for t in theta.iter().take(self.count) {
+            let _ = tensions.push(*t);
+        }
+        let eq = crate::shooting::failed_equilibrium(&self.load(theta), termination);
+        TendonEstimate {
+            solved: TendonEquilibrium {
+                equilibrium: eq,
+                tensions_n: tensions,
+                path_m: Vec::new(),
+            },
+            states: Vec::new(),
+            termination,
+            iterations: 0,
+            sweeps: self.sweeps,
+            quality: TendonQuality {
+                tension_std_n: Vec::new(),
+                force_std_n: Vector3::repeat(T::lit(f64::NAN)),
+                tip_std_m: Vector3::repeat(T::lit(f64::NAN)),
+                residual_rms_sigma: T::lit(f64::NAN),
+                force_observable: false,
+                determination: Determination::Undetermined,
+                tension_determination: Determination::Undetermined,
+            },
+        }
+    }
+
+    /// The estimate of a finished fit.
+    fn finish(&self, outcome: Outcome<T>) -> TendonEstimate<T> {
+        let Outcome {
+            fit,
+            termination,
+            iterations,
+            linear,
+        } = outcome;
+        let quality = match &linear {
+            Some((jac, d_tip)) => self.quality(&fit, jac, d_tip),
+            None => self.failed(&fit.theta, termination).quality,
+        };
+        let mut states = Vec::new();
+        for j in 0..self.count {
+            let taut = fit.theta.get(j).is_some_and(|t| *t > T::zero());
+            let _ = states.push(if taut {
+                TendonState::Taut
+            } else {
+                TendonState::Slack
+            });
+        }
+        TendonEstimate {
+            solved: fit.solved,
+            states,
+            termination,
+            iterations,
+            sweeps: self.sweeps,
+            quality,
+        }
+    }
+
+    /// Restarts from tip forces of `scan_reach` buckling scales along each axis, both signs: a fit
+    /// as good (within 9 in the sum of squares, three standard deviations) and more than three
+    /// posterior standard deviations away makes the answer ambiguous; a clearly better one replaces
+    /// it. A restart that ends unconverged, as good, makes it unverified.
+    fn search(&mut self, best: &mut TendonEstimate<T>) -> Result<(), ModelError> {
+        if !matches!(
+            best.quality.determination,
+            Determination::Determined | Determination::Weak
+        ) {
+            return Ok(());
+        }
+        if self.settings.scan_reach <= T::zero() {
+            best.quality.determination = best
+                .quality
+                .determination
+                .at_best(Determination::Unverified);
+            return Ok(());
+        }
+        let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
+        let nine = T::lit(9.0);
+        let mut verdict = best.quality.determination;
+        let best_theta = |e: &TendonEstimate<T>, count: usize| {
+            let mut theta = Theta::zeros();
+            for (t, v) in theta.iter_mut().zip(&e.solved.tensions_n) {
+                *t = *v;
+            }
+            for i in 0..3 {
+                if let (Some(t), Some(f)) = (theta.get_mut(count + i), e.force_n().get(i)) {
+                    *t = *f;
+                }
+            }
+            theta
+        };
+        let answer = best_theta(best, self.count);
+        let best_cost = self.cost_of(&answer, &best.solved)?;
+        for axis in 0..3 {
+            for sign in [T::one(), -T::one()] {
+                let mut theta = answer;
+                if let Some(f) = theta.get_mut(self.count + axis) {
+                    *f += sign * scale;
+                }
+                let Some(start) = self.evaluate(&theta, None)? else {
+                    continue;
+                };
+                let outcome = self.fit(start)?;
+                let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
+                if cost > best_cost + nine {
+                    continue;
+                }
+                if !outcome.termination.is_success() {
+                    verdict = verdict.at_best(Determination::Unverified);
+                    continue;
+                }
+                let apart = self.apart_sigma(&outcome.fit.theta, &answer, best);
+                if apart <= T::lit(3.0) {
+                    continue;
+                }
+                if cost + nine < best_cost {
+                    // A clearly better answer: it replaces this one, and the search does not vouch
+                    // for it (it was not searched around).
+                    let mut better = self.finish(outcome);
+                    better.quality.determination = better
+                        .quality
+                        .determination
+                        .at_best(Determination::Unverified);
+                    *best = better;
+                    return Ok(());
+                }
+                verdict = Determination::Ambiguous;
+            }
+        }
+        best.quality.determination = verdict;
+        Ok(())
+    }
+
+    /// The sum of squares at `theta` on `solved`.
+    fn cost_of(
+        &mut self,
+        theta: &Theta<T>,
+        solved: &TendonEquilibrium<T>,
+    ) -> Result<T, ModelError> {
+        Ok(self
+            .evaluate(theta, Some(solved))?
+            .map_or(T::max_value().unwrap_or_else(T::one), |f| {
+                Problem::<T, A, NODES>::cost(&f)
+            }))
+    }
+
+    /// How far apart two estimates are, in the answer's posterior standard deviations (the largest
+    /// over the unknowns).
+    fn apart_sigma(&self, a: &Theta<T>, b: &Theta<T>, best: &TendonEstimate<T>) -> T {
+        let mut worst = T::zero();
+        for (j, s) in best.quality.tension_std_n.iter().enumerate() {
+            let d = (a.get(j).copied().unwrap_or_else(T::zero)
+                - b.get(j).copied().unwrap_or_else(T::zero))
+            .abs();
+            worst = worst.max(d / s.max(T::default_epsilon()));
+        }
+        for i in 0..3 {
+            let c = self.count + i;
+            let d = (a.get(c).copied().unwrap_or_else(T::zero)
+                - b.get(c).copied().unwrap_or_else(T::zero))
+            .abs();
+            let s = best
+                .quality
+                .force_std_n
+                .get(i)
+                .copied()
+                .unwrap_or_else(T::one);
+            worst = worst.max(d / s.max(T::default_epsilon()));
+        }
+        worst
+    }
+}
