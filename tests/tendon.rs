@@ -261,6 +261,7 @@ fn tendon_at_zero_offset_only_compresses() {
         end_m: 0.2,
         axial_stiffness_n: None,
         feed_length_m: 0.0,
+        friction_coefficient: 0.0,
     };
     let tau = 50.0;
     let (_, _, solved) = solve(rod, &[on_axis], &[tau], [0.0; 3]);
@@ -372,20 +373,14 @@ fn tendon_bad_input_is_refused() {
     ));
 }
 
-/// The spool displacements that tensions produce: `U0 - (feed + path) / (1 + tau / E_t A_t)` for a
-/// taut tendon.
+/// The spool displacements that tensions produce: the home length (feed and rest path) less the
+/// unstretched length the equilibrium needs.
 fn displacements_of<T: Scalar>(tendons: &Tendons<T>, solved: &TendonEquilibrium<T>) -> Vec<T> {
     tendons
         .tendons()
         .iter()
         .enumerate()
-        .map(|(j, t)| {
-            let rest = tendons.rest_length_m(j).unwrap();
-            let stretch = t
-                .axial_stiffness_n
-                .map_or(T::one(), |k| T::one() + solved.tensions_n[j] / k);
-            t.feed_length_m + rest - (t.feed_length_m + solved.path_m[j]) / stretch
-        })
+        .map(|(j, t)| t.feed_length_m + tendons.rest_length_m(j).unwrap() - solved.unstretched_m[j])
         .collect()
 }
 
@@ -635,4 +630,110 @@ fn tendon_inverse_of_impossible_displacements_is_not_an_answer() {
         est.termination,
         est.quality.determination
     );
+}
+
+/// One tendon on the dense rod (no gravity) with capstan friction `mu`, sliding `sliding`: the tip
+/// tangent's angle, rad.
+fn friction_tip_angle(guides: usize, mu: f64, sliding: model_core::Sliding) -> f64 {
+    let (rod, mut tendons) = reference::tendon_dense::<f64>(guides, 400).unwrap();
+    tendons[0].friction_coefficient = mu;
+    let model = Model::<f64>::new(rod).unwrap();
+    let mut set = Tendons::new(&model, &tendons).unwrap();
+    assert!(set.set_sliding(0, sliding));
+    let solved = model
+        .solve_tendons(&set, &[1.0], &TipLoad::zero(), None, &settings())
+        .unwrap();
+    assert!(solved.is_success());
+    let t = solved.equilibrium.tip_tangent();
+    t.y.atan2(t.x)
+}
+
+/// Capstan friction: pulling in, the tension falls along the tendon by `exp(-mu theta)`, so the
+/// curvature `tau(s) r / E I` falls with the bend `theta(s)` and `theta(L) = ln(1 + mu k0 L) / mu`
+/// (`k0 = tau r / E I`); paying out it rises, `theta(L) = -ln(1 - mu k0 L) / mu`. Dense guides
+/// approach both; loading and unloading differ (hysteresis), and `mu = 0` is frictionless either way.
+#[test]
+fn tendon_capstan_friction_matches_its_continuous_law_and_makes_hysteresis() {
+    use model_core::Sliding;
+    let ei = 54e9 * std::f64::consts::PI * 1.4e-3f64.powi(4) / 64.0;
+    let k0l = 1.0 * 0.01 / ei * 0.2;
+    let mu = 0.2;
+    let pulling = friction_tip_angle(80, mu, Sliding::In);
+    let paying_out = friction_tip_angle(80, mu, Sliding::Out);
+    let frictionless = friction_tip_angle(80, 0.0, Sliding::In);
+    let want_in = (1.0 + mu * k0l).ln() / mu;
+    let want_out = -(1.0 - mu * k0l).ln() / mu;
+    assert!((frictionless - k0l).abs() < 1e-4, "{frictionless} vs {k0l}");
+    // The friction effect is 4e-3 rad each way; the dense guides resolve it to a few 1e-5.
+    assert!((pulling - want_in).abs() < 1e-4, "{pulling} vs {want_in}");
+    assert!(
+        (paying_out - want_out).abs() < 1e-4,
+        "{paying_out} vs {want_out}"
+    );
+    assert!(paying_out - pulling > 5e-3);
+    // Without friction the sliding direction changes nothing.
+    assert_eq!(
+        friction_tip_angle(20, 0.0, Sliding::Out),
+        friction_tip_angle(20, 0.0, Sliding::In)
+    );
+}
+
+/// Friction in displacement control: the tensions at the spool come back from the displacements,
+/// and the same displacements need different spool tensions loading and unloading.
+#[test]
+fn tendon_friction_round_trip_and_hysteresis_in_displacement_control() {
+    use model_core::Sliding;
+    let (rod, mut tendons) = reference::tendon_bench::<f64>(100).unwrap();
+    for t in tendons.iter_mut() {
+        t.friction_coefficient = 0.15;
+        t.axial_stiffness_n = Some(3000.0);
+        t.feed_length_m = 0.5;
+    }
+    let model = Model::<f64>::new(rod).unwrap();
+    let mut set = Tendons::new(&model, &tendons).unwrap();
+    let tau = [2.5, 0.5, 1.0];
+    let truth = model
+        .solve_tendons(&set, &tau, &TipLoad::zero(), None, &settings())
+        .unwrap();
+    assert!(truth.is_success());
+    let d = displacements_of(&set, &truth);
+    let back = model
+        .solve_displacements(
+            &set,
+            &d,
+            &TipLoad::zero(),
+            None,
+            &settings(),
+            &Default::default(),
+        )
+        .unwrap();
+    assert!(back.is_success(), "{:?}", back.termination);
+    for (found, want) in back.solved.tensions_n.iter().zip(tau) {
+        assert!((found - want).abs() < 1e-6, "{found} vs {want}");
+    }
+    // Unloading through the same displacements: friction now helps hold the shape, so the spools
+    // pull less.
+    for j in 0..3 {
+        set.set_sliding(j, Sliding::Out);
+    }
+    let unloading = model
+        .solve_displacements(
+            &set,
+            &d,
+            &TipLoad::zero(),
+            Some(&truth),
+            &settings(),
+            &Default::default(),
+        )
+        .unwrap();
+    assert!(unloading.is_success());
+    assert!(
+        unloading.solved.tensions_n[0] < tau[0] - 0.05,
+        "{:?}",
+        unloading.solved.tensions_n
+    );
+    // Its equilibrium needs exactly the lengths the spools left.
+    for (a, b) in displacements_of(&set, &unloading.solved).iter().zip(&d) {
+        assert!((a - b).abs() < 1e-10, "{a} vs {b}");
+    }
 }

@@ -241,6 +241,7 @@ pub fn tendon_bench<T: Scalar>(steps: u16) -> Result<(Rod<T>, [Tendon<T>; 3]), M
         end_m: T::lit(FREE_LENGTH_M),
         axial_stiffness_n: None,
         feed_length_m: T::zero(),
+        friction_coefficient: T::zero(),
     });
     Ok((rod, tendons))
 }
@@ -342,6 +343,7 @@ pub fn tendon_dense<T: Scalar>(
             end_m: T::lit(0.2),
             axial_stiffness_n: None,
             feed_length_m: T::zero(),
+            friction_coefficient: T::zero(),
         }],
     ))
 }

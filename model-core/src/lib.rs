@@ -79,7 +79,7 @@ pub use shape::ShapePoint;
 pub use shooting::{Equilibrium, Evaluation, ShootingSettings, Start};
 pub use stability::Stability;
 pub use tendon::{
-    DisplacementSettings, DisplacementSolve, MAX_TENDONS, MeasuredTensions, Tendon,
+    DisplacementSettings, DisplacementSolve, MAX_TENDONS, MeasuredTensions, Sliding, Tendon,
     TendonEquilibrium, TendonEstimate, TendonInverseSettings, TendonQuality, TendonState, Tendons,
 };
 

@@ -21,12 +21,15 @@ use super::force_state::{self, ForceStateRod};
 use super::{Family, Linear, Pose, RodOde};
 use crate::Scalar;
 use crate::kinematics::Attitude;
-use crate::loads::{NoShapeLoad, TipLoad, Wrench};
+use crate::loads::{NoShapeLoad, TipLoad};
 use crate::model::{Grid, Model};
 use crate::plan::{Interval, NO_GUIDE, Node};
 use crate::shape::ShapePoint;
 use crate::sweep::{MAX_TANGENTS, rk4};
-use crate::tendon::guide_force::{GuidePose, PoseDelta, guide_wrench, reads_next};
+use crate::tendon::Routed;
+use crate::tendon::guide_force::{
+    GuideLoad, GuidePose, PoseDelta, Role, guide_load, reads_next, role,
+};
 use crate::tendon::{MAX_TENDONS, Tendons};
 
 /// Newton iterations of one guide's implicit jump.
@@ -107,14 +110,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         }
     }
 
-    /// The tendons' wrench at `guide` and its change.
-    fn wrench(
+    /// The tendons' load at `guide` with the chord tensions `back_n` arriving there.
+    fn load(
         &self,
         guide: usize,
+        back_n: &[T],
         poses: [&GuidePose<T>; 3],
-        d: Option<[&PoseDelta<T>; 3]>,
-    ) -> (Wrench<T>, Wrench<T>) {
-        guide_wrench(&self.tendons.routed, self.tensions(), guide, poses, d)
+        d: Option<([&PoseDelta<T>; 3], &[T])>,
+    ) -> GuideLoad<T> {
+        guide_load(&self.tendons.routed, back_n, guide, poses, d)
     }
 
     /// Integrates from node `start` (state `y`, its jump applied) to the next node with a guide,
@@ -166,19 +170,21 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     }
 
     /// The implicit jump at `guide` (node index `index`), where a tendon passes: solves for
-    /// `(n(s+), m(s+))` and makes the tangents consistent. `false` when it does not converge.
+    /// `(n(s+), m(s+))`, sets the chord tensions beyond and makes the tangents consistent. `false`
+    /// when it does not converge.
     fn implicit_jump(
         &self,
         index: usize,
         guide: usize,
-        prev: &GuidePose<T>,
-        cur: &GuidePose<T>,
-        y: &mut force_state::State<T, A>,
+        y: &mut State<T, A>,
         tangents: &mut [Tangent<T>],
     ) -> bool {
         let length = self.model.length_m();
         let zero = PoseDelta::zero();
-        let (n_minus, m_minus) = (y.n, y.m);
+        let prev = y.prev;
+        let cur = Self::guide_pose(&y.rod);
+        let back = y.chord_n;
+        let (n_minus, m_minus) = (y.rod.n, y.rod.m);
         // Start from the next guide straight ahead.
         let ds = self
             .tendons
@@ -191,7 +197,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             position_m: cur.position_m + cur.rotation.column(2) * ds,
             rotation: cur.rotation,
         };
-        let (w0, _) = self.wrench(guide, [prev, cur, &predicted], None);
+        let w0 = self
+            .load(guide, &back, [&prev, &cur, &predicted], None)
+            .wrench;
         let (mut n, mut m) = (n_minus - w0.force_n, m_minus - w0.moment_nm);
 
         let count = tangents.len().min(MAX_TANGENTS);
@@ -204,12 +212,18 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut last_step = T::max_value().unwrap_or_else(T::one);
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
         for iteration in 0..MAX_JUMP_ITERATIONS {
-            // Each tangent's change before the look-ahead: what the known poses give (at the last
-            // look-ahead's next pose: the chord ahead sets how this hole's move pulls).
+            // Each tangent's change before the look-ahead: what the known poses and tensions give
+            // (at the last look-ahead's next pose: the chord ahead sets how this hole's move pulls).
             for (o, t) in outer.iter_mut().zip(tangents.iter()) {
                 let d = Self::delta(&t.rod);
-                let (_, dw) =
-                    self.wrench(guide, [prev, cur, &next_guess], Some([&t.prev, &d, &zero]));
+                let dw = self
+                    .load(
+                        guide,
+                        &back,
+                        [&prev, &cur, &next_guess],
+                        Some(([&t.prev, &d, &zero], &t.d_chord_n)),
+                    )
+                    .d_wrench;
                 *o = t.rod;
                 o.n -= dw.force_n;
                 o.m -= dw.moment_nm;
@@ -227,18 +241,23 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             let Some(dirs) = all.get_mut(..6 + count) else {
                 return false;
             };
-            let start = force_state::State { n, m, ..*y };
+            let start = force_state::State { n, m, ..y.rod };
             let Some(end) = self.ahead(index, &start, dirs) else {
                 return false;
             };
             let next = Self::guide_pose(&end);
             next_guess = next;
-            let (w, _) = self.wrench(guide, [prev, cur, &next], None);
+            let poses = [&prev, &cur, &next];
+            let here = self.load(guide, &back, poses, None);
+            let w = here.wrench;
             let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
             let mut jacobian = SMatrix::<T, 6, 6>::identity();
             for (j, mut col) in jacobian.column_iter_mut().enumerate() {
                 let d = all.get(j).map_or(zero, Self::delta);
-                let (_, dw) = self.wrench(guide, [prev, cur, &next], Some([&zero, &zero, &d]));
+                let no_change = [T::zero(); MAX_TENDONS];
+                let dw = self
+                    .load(guide, &back, poses, Some(([&zero, &zero, &d], &no_change)))
+                    .d_wrench;
                 col += self.stack(&dw.force_n, &dw.moment_nm);
             }
             let lu = jacobian.lu();
@@ -258,27 +277,64 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 if size > T::lit(1024.0) * eps * scale {
                     return false;
                 }
-                // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`.
+                // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`; the
+                // next pose then moves by `dP0 + Psi delta`, which sets the tensions beyond.
                 for (j, t) in tangents.iter_mut().enumerate().take(count) {
                     let (Some(ahead), Some(provisional)) = (all.get(6 + j), outer.get(j)) else {
                         return false;
                     };
-                    let d = Self::delta(ahead);
-                    let (_, dw) = self.wrench(guide, [prev, cur, &next], Some([&zero, &zero, &d]));
+                    let d0 = Self::delta(ahead);
+                    let no_change = [T::zero(); MAX_TENDONS];
+                    let dw = self
+                        .load(guide, &back, poses, Some(([&zero, &zero, &d0], &no_change)))
+                        .d_wrench;
                     let Some(delta) = lu.solve(&(-self.stack(&dw.force_n, &dw.moment_nm))) else {
                         return false;
                     };
                     let (dn, dm) = split(&delta);
                     t.rod.n = provisional.n + dn / length;
                     t.rod.m = provisional.m + dm;
+                    let mut d_next = d0;
+                    for (dir, k) in all.iter().zip(delta.iter()) {
+                        d_next.position_m += dir.p * *k;
+                        d_next.rotation_rad += dir.th * *k;
+                    }
+                    let d_cur = Self::delta(&t.rod);
+                    let full = self.load(
+                        guide,
+                        &back,
+                        poses,
+                        Some(([&t.prev, &d_cur, &d_next], &t.d_chord_n)),
+                    );
+                    carry(
+                        &self.tendons.routed,
+                        guide,
+                        &full.d_ahead_n,
+                        &mut t.d_chord_n,
+                    );
                 }
-                y.n = n;
-                y.m = m;
+                carry(&self.tendons.routed, guide, &here.ahead_n, &mut y.chord_n);
+                y.rod.n = n;
+                y.rod.m = m;
                 return true;
             }
             last_step = size;
         }
         false
+    }
+}
+
+/// Each tendon passing `guide` takes its tension beyond (`ahead`) into the next chord.
+fn carry<T: Scalar>(
+    routed: &[Routed<T>],
+    guide: usize,
+    ahead: &[T; MAX_TENDONS],
+    chord: &mut [T; MAX_TENDONS],
+) {
+    for ((c, a), r) in chord.iter_mut().zip(ahead).zip(routed) {
+        if role(r, guide) == Role::Passes {
+            *c = *a;
+        }
     }
 }
 
@@ -295,6 +351,8 @@ fn split<T: Scalar>(v: &SVector<T, 6>) -> (Vector3<T>, Vector3<T>) {
 pub(crate) struct State<T: Scalar, A> {
     rod: force_state::State<T, A>,
     prev: GuidePose<T>,
+    /// Each tendon's tension in the chord arriving at the next guide, N (at the load scale).
+    chord_n: [T; MAX_TENDONS],
 }
 
 /// A tangent of the rod's state and of the previous guide's pose.
@@ -302,6 +360,7 @@ pub(crate) struct State<T: Scalar, A> {
 pub(crate) struct Tangent<T> {
     rod: force_state::Tangent<T>,
     prev: PoseDelta<T>,
+    d_chord_n: [T; MAX_TENDONS],
 }
 
 impl<T: Scalar> Linear<T> for Tangent<T> {
@@ -310,6 +369,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
         Self {
             rod: force_state::Tangent::zero(),
             prev: PoseDelta::zero(),
+            d_chord_n: [T::zero(); MAX_TENDONS],
         }
     }
 
@@ -318,7 +378,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
     fn axpy(&self, k: &Self, h: T) -> Self {
         Self {
             rod: self.rod.axpy(&k.rod, h),
-            prev: self.prev,
+            ..*self
         }
     }
 
@@ -327,7 +387,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
         let [k1, k2, k3, k4] = k;
         Self {
             rod: self.rod.rk4(&[k1.rod, k2.rod, k3.rod, k4.rod], h),
-            prev: self.prev,
+            ..*self
         }
     }
 
@@ -335,6 +395,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
         self.rod.is_finite()
             && crate::scalar::all_finite(&self.prev.position_m)
             && crate::scalar::all_finite(&self.prev.rotation_rad)
+            && self.d_chord_n.iter().all(|x| x.is_finite())
     }
 }
 
@@ -390,6 +451,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
                 position_m: rod.base_position_m,
                 rotation: rod.base_orientation,
             },
+            chord_n: self.scaled_n,
         }
     }
 
@@ -398,7 +460,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         (
             Tangent {
                 rod,
-                prev: PoseDelta::zero(),
+                ..Tangent::zero()
             },
             seed,
         )
@@ -445,7 +507,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     fn advance(y: &State<T, A>, k: &force_state::Rates<T, A>, h: T) -> State<T, A> {
         State {
             rod: Inner::<T, A, NODES>::advance(&y.rod, k, h),
-            prev: y.prev,
+            ..*y
         }
     }
 
@@ -453,7 +515,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     fn combine(y: &State<T, A>, k: [&force_state::Rates<T, A>; 4], h: T) -> State<T, A> {
         State {
             rod: Inner::<T, A, NODES>::combine(&y.rod, k, h),
-            prev: y.prev,
+            ..*y
         }
     }
 
@@ -467,7 +529,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     ) -> Tangent<T> {
         Tangent {
             rod: self.rod.tangent_rate(f, stage, seed, &t.rod),
-            prev: PoseDelta::zero(),
+            ..Tangent::zero()
         }
     }
 
@@ -488,28 +550,34 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         }
         let guide = usize::from(node.guide);
         let cur = Self::guide_pose(&y.rod);
-        let prev = y.prev;
         let zero = PoseDelta::zero();
-        if reads_next(&self.tendons.routed, self.tensions(), guide) {
+        if reads_next(&self.tendons.routed, &y.chord_n, guide) {
             let grid = self.rod.grid();
             let index = grid.nodes.iter().position(|n| n.guide == node.guide);
-            let solved = index.is_some_and(|index| {
-                self.implicit_jump(index, guide, &prev, &cur, &mut y.rod, tangents)
-            });
+            let solved = index.is_some_and(|index| self.implicit_jump(index, guide, y, tangents));
             if !solved {
                 // No consistent jump: the sweep reports a non-finite result, never a wrong one.
                 y.rod.n = Vector3::repeat(T::lit(f64::NAN));
             }
         } else {
-            let (w, _) = self.wrench(guide, [&prev, &cur, &cur], None);
-            y.rod.n -= w.force_n;
-            y.rod.m -= w.moment_nm;
+            let prev = y.prev;
+            let poses = [&prev, &cur, &cur];
+            let w = self.load(guide, &y.chord_n, poses, None).wrench;
             for t in tangents.iter_mut() {
                 let d = Self::delta(&t.rod);
-                let (_, dw) = self.wrench(guide, [&prev, &cur, &cur], Some([&t.prev, &d, &zero]));
+                let dw = self
+                    .load(
+                        guide,
+                        &y.chord_n,
+                        poses,
+                        Some(([&t.prev, &d, &zero], &t.d_chord_n)),
+                    )
+                    .d_wrench;
                 t.rod.n -= dw.force_n;
                 t.rod.m -= dw.moment_nm;
             }
+            y.rod.n -= w.force_n;
+            y.rod.m -= w.moment_nm;
         }
         y.prev = cur;
         for t in tangents.iter_mut() {
@@ -537,12 +605,19 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             let guide = usize::from(node.guide);
             let cur = Self::guide_pose(&y.rod);
             let zero = PoseDelta::zero();
-            let (w, _) = self.wrench(guide, [&y.prev, &cur, &cur], None);
+            let poses = [&y.prev, &cur, &cur];
+            let w = self.load(guide, &y.chord_n, poses, None).wrench;
             r -= self.stack(&w.force_n, &w.moment_nm);
             for (e, t) in d.iter_mut().zip(tangents) {
                 let dc = Self::delta(&t.rod);
-                let (_, dw) =
-                    self.wrench(guide, [&y.prev, &cur, &cur], Some([&t.prev, &dc, &zero]));
+                let dw = self
+                    .load(
+                        guide,
+                        &y.chord_n,
+                        poses,
+                        Some(([&t.prev, &dc, &zero], &t.d_chord_n)),
+                    )
+                    .d_wrench;
                 *e -= self.stack(&dw.force_n, &dw.moment_nm);
             }
         }
@@ -648,11 +723,24 @@ mod tests {
         )
     }
 
-    /// The sweep's Jacobian (tangents through the implicit jumps) against central differences.
+    /// The sweep's Jacobian (tangents through the implicit jumps, the chords' tensions with capstan
+    /// friction both ways) against central differences.
     #[test]
     fn tendon_jacobian_matches_finite_differences() {
-        let (model, tendons) = scene();
-        let tendons = Tendons::new(&model, &tendons).unwrap();
+        use crate::tendon::Sliding;
+        for (mu, sliding) in [(0.0, Sliding::In), (0.3, Sliding::In), (0.3, Sliding::Out)] {
+            jacobian_matches(mu, sliding);
+        }
+    }
+
+    fn jacobian_matches(mu: f64, sliding: crate::tendon::Sliding) {
+        let (model, mut tendons) = scene();
+        for t in tendons.iter_mut() {
+            t.friction_coefficient = mu;
+        }
+        let mut tendons = Tendons::new(&model, &tendons).unwrap();
+        tendons.set_sliding(0, sliding);
+        tendons.set_sliding(1, sliding);
         let mut tau = [0.0; MAX_TENDONS];
         tau[0] = 2.0;
         tau[1] = 1.5;
@@ -673,6 +761,9 @@ mod tests {
             let err = (fd - j.column(c)).norm() / j.norm();
             worst = worst.max(err);
         }
-        assert!(worst < 1e-6, "Jacobian off by {worst:e} (relative)");
+        assert!(
+            worst < 1e-6,
+            "mu {mu}: Jacobian off by {worst:e} (relative)"
+        );
     }
 }

@@ -3,12 +3,12 @@
 //!
 //! Tendon `j` was set on the straight, unloaded rod with zero tension: its unstretched free length,
 //! spool to termination, was `U0 = feed + rest`, `rest` its path there (its termination's arc
-//! length). The spool has since taken in `d_j` (positive shortens), so `U = U0 - d`. Under tension
-//! `tau` it stretches to `U (1 + tau / (E_t A_t))` (`E_t A_t` infinite for an inextensible tendon)
-//! and must span `feed + path(tau, F)`. The gap
-//! `phi = U (1 + tau / E_t A_t) - feed - path` is the slack: a taut tendon has `phi = 0` and
-//! `tau >= 0`, a slack one `tau = 0` and `phi >= 0`; never a negative tension, never a tendon
-//! longer than its stretch allows. This complementarity is solved as
+//! length). The spool has since taken in `d_j` (positive shortens), leaving `U0 - d`. The
+//! equilibrium at tensions `tau` needs the unstretched length `N(tau, F)` (`paths.rs`: the feed and
+//! every chord, each shortened by its own tension's stretch `tau / E_t A_t`). The gap
+//! `phi = U0 - d - N` is the slack: a taut tendon has `phi = 0` and `tau >= 0`, a slack one
+//! `tau = 0` and `phi >= 0`; never a negative tension, never a tendon longer than its stretch
+//! allows. This complementarity is solved as
 //! `FB(tau / tau_s, phi / r) = a + b - sqrt(a^2 + b^2) = 0` (Fischer-Burmeister) by a semi-smooth
 //! Newton with a backtracking line search; `tau_s` bends the rod about a radian through the largest
 //! offset `r`. Each iteration is a forward solve from tensions (`forward.rs`), warm, and the path's
@@ -95,45 +95,24 @@ fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
 }
 
 impl<T: Scalar> Tendons<T> {
-    /// The slack `phi_j`, m, of each tendon at tensions `tau` with paths `path` after spool
-    /// displacements `d`.
-    pub(crate) fn slack(
-        &self,
-        displacements_m: &[T],
-        tensions_n: &[T],
-        path_m: &[T],
-    ) -> [T; MAX_TENDONS] {
+    /// The slack `phi_j`, m, of each tendon after spool displacements `d` when the equilibrium
+    /// needs the unstretched lengths `unstretched_m`: what the spool left minus what is needed.
+    pub(crate) fn slack(&self, displacements_m: &[T], unstretched_m: &[T]) -> [T; MAX_TENDONS] {
         let mut out = [T::zero(); MAX_TENDONS];
         for (j, phi) in out.iter_mut().enumerate().take(self.len()) {
-            let (Some(t), Some(d), Some(tau), Some(path), Some(rest)) = (
-                self.tendons.get(j),
-                displacements_m.get(j),
-                tensions_n.get(j),
-                path_m.get(j),
-                self.rest_length_m(j),
-            ) else {
+            let (Some(d), Some(needed)) = (displacements_m.get(j), unstretched_m.get(j)) else {
                 continue;
             };
-            let unstretched = t.feed_length_m + rest - *d;
-            let stretch = t
-                .axial_stiffness_n
-                .map_or(T::one(), |k| T::one() + *tau / k);
-            *phi = unstretched * stretch - t.feed_length_m - *path;
+            *phi = self.home_length_m(j) - *d - *needed;
         }
         out
     }
 
-    /// `d phi_j / d tau_j` from the tendon's own stretch, m/N.
-    fn stretch_compliance(&self, displacements_m: &[T], j: usize) -> T {
-        let (Some(t), Some(d), Some(rest)) = (
-            self.tendons.get(j),
-            displacements_m.get(j),
-            self.rest_length_m(j),
-        ) else {
-            return T::zero();
-        };
-        t.axial_stiffness_n
-            .map_or(T::zero(), |k| (t.feed_length_m + rest - *d) / k)
+    /// Tendon `j`'s unstretched length at home (the straight, unloaded rod at zero tension), spool
+    /// to termination, m.
+    pub(crate) fn home_length_m(&self, j: usize) -> T {
+        let feed = self.tendons.get(j).map_or(T::zero(), |t| t.feed_length_m);
+        feed + self.rest_length_m(j).unwrap_or_else(T::zero)
     }
 }
 
@@ -196,7 +175,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         sweeps += u32::from(current.equilibrium.report.sweeps);
 
         let residual_of = |eq: &TendonEquilibrium<T>, tau: &[T; MAX_TENDONS]| {
-            let phi = tendons.slack(displacements_m, tau, &eq.path_m);
+            let phi = tendons.slack(displacements_m, &eq.unstretched_m);
             let mut r = SVector::<T, MAX_TENDONS>::zeros();
             let mut parts = [(T::zero(), T::zero()); MAX_TENDONS];
             for (((r, part), t), p) in r
@@ -235,25 +214,18 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 }
             };
             sweeps += sens.sweeps;
-            // d FB / d tau: d phi / d tau = stretch compliance - d path / d tau.
-            let compliance = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
-                tendons.stretch_compliance(displacements_m, j)
-            });
+            // d FB / d tau, with d phi / d tau = -d (needed unstretched length) / d tau.
             let jacobian = SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
                 if j >= count || i >= count {
                     return if i == j { T::one() } else { T::zero() };
                 }
                 let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
-                let mut d_phi = -sens
-                    .d_path_d_tension
+                let d_phi = -sens
+                    .d_length_d_tension
                     .get((j, i))
                     .copied()
                     .unwrap_or_else(T::zero);
-                let mut d_tau = T::zero();
-                if i == j {
-                    d_phi += compliance.get(j).copied().unwrap_or_else(T::zero);
-                    d_tau = T::one();
-                }
+                let d_tau = if i == j { T::one() } else { T::zero() };
                 da * d_tau / tau_scale + db * d_phi / radius
             });
             let Some(step) = jacobian.lu().solve(&(-r)) else {

@@ -4,8 +4,9 @@
 use heapless::Vec;
 use nalgebra::SVector;
 
-use super::paths::path_lengths;
+use super::paths::{Lengths, lengths};
 use super::{MAX_TENDONS, Tendons};
+
 use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
@@ -25,6 +26,10 @@ pub struct TendonEquilibrium<T> {
     pub tensions_n: Vec<T, MAX_TENDONS>,
     /// Each tendon's path length, m (empty unless the solve succeeded).
     pub path_m: Vec<T, MAX_TENDONS>,
+    /// Each tendon's unstretched length from spool to termination that the equilibrium needs, m:
+    /// its feed and chords, each shortened by its own tension's stretch (the path plus the feed for
+    /// an inextensible tendon). Empty unless the solve succeeded.
+    pub unstretched_m: Vec<T, MAX_TENDONS>,
 }
 
 impl<T: Scalar> TendonEquilibrium<T> {
@@ -91,11 +96,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             let _ = tensions.push(*t);
         }
         let mut path_m = Vec::new();
+        let mut unstretched_m = Vec::new();
         if let (true, Some(x)) = (eq.report.termination.is_success(), x) {
-            match self.tendon_paths(tendons, &ode, &x) {
+            match self.tendon_lengths(tendons, tensions_n, &ode, &x) {
                 Some(lengths) => {
-                    for l in lengths.iter().take(tendons.len()) {
-                        let _ = path_m.push(*l);
+                    for (p, u) in lengths
+                        .path_m
+                        .iter()
+                        .zip(&lengths.unstretched_m)
+                        .take(tendons.len())
+                    {
+                        // Cannot overflow: at most MAX_TENDONS.
+                        let _ = path_m.push(*p);
+                        let _ = unstretched_m.push(*u);
                     }
                 }
                 None => eq.report.termination = Termination::NonFinite,
@@ -105,22 +118,25 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             equilibrium: eq,
             tensions_n: tensions,
             path_m,
+            unstretched_m,
         })
     }
 
-    fn tendon_paths(
+    fn tendon_lengths(
         &self,
         tendons: &Tendons<T>,
+        tensions_n: &[T],
         ode: &TendonRod<'_, T, A, NODES>,
         x: &SVector<T, 6>,
-    ) -> Option<[T; MAX_TENDONS]> {
+    ) -> Option<Lengths<T>> {
         let mut guides = [ShapePoint::default(); MAX_GUIDES];
         let count = tendons.guide_s_m.len();
         let out = guides.get_mut(..count)?;
         let written = shape_of(ode, x, &tendons.guide_s_m, out).ok()?;
         let rod = self.rod();
-        path_lengths(
+        lengths(
             tendons,
+            tensions_n,
             &rod.base_position_m,
             &rod.base_orientation,
             guides.get(..written)?,

@@ -1,18 +1,23 @@
 //! The force of the tendons on one guide, and its linearisation (MODEL.md §6.1).
 //!
-//! Tendon `j` with tension `tau_j` has its hole at `P = p + R d_j` in the guide's pose `(p, R)`. At a
-//! guide it passes, it pulls toward both neighbouring holes:
-//! `F = tau (unit(P_next - P) - unit(P - P_prev))`; at its termination only toward the previous one:
-//! `F = -tau unit(P - P_prev)`. The moment about the backbone point is `(R d) x F`. Exact for
-//! zero-thickness guides and full chords: the chord between two holes pulls them together with
-//! equal and opposite forces along one line.
+//! Tendon `j` has its hole at `P = p + R d_j` in the guide's pose `(p, R)`. The chord arriving from
+//! the previous hole carries the tension `tau_b`; at a guide the tendon passes, it pulls toward both
+//! neighbouring holes: `F = tau_a unit(P_next - P) - tau_b unit(P - P_prev)`; at its termination
+//! only toward the previous one: `F = -tau_b unit(P - P_prev)`. The moment about the backbone point
+//! is `(R d) x F`. Exact for zero-thickness guides and full chords.
 //!
-//! Linearised, with `dP = dp + R (dtheta x d)` (`dtheta` in the body frame) and
-//! `d unit(a) = (da - unit(a) (unit(a) . da)) / |a|`.
+//! Frictionless, `tau_a = tau_b` all along. With capstan friction (coefficient `mu`) the tension
+//! changes across each hole by `exp(c theta)`, `theta` the wrap angle between the chords and
+//! `c = -mu` while the spool pulls the tendon in (`+mu` while it pays out); at the first guide the
+//! base plate's hole adds its own wrap, from the tendon's entry along the base tangent.
+//!
+//! Linearised, with `dP = dp + R (dtheta x d)` (`dtheta` in the body frame),
+//! `d unit(a) = (da - unit(a) (unit(a) . da)) / |a|` and, for `theta = atan2(|a x b|, a . b)`,
+//! `d theta = (c ds - s dc) / (s^2 + c^2)`.
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::Routed;
+use super::{MAX_TENDONS, Routed};
 use crate::Scalar;
 use crate::loads::Wrench;
 
@@ -83,47 +88,110 @@ fn unit_and_change<T: Scalar>(a: &Vector3<T>, da: &Vector3<T>) -> (Vector3<T>, V
     (u, (da - u * u.dot(da)) / len)
 }
 
-/// The tendons' wrench on guide `guide` at pose `cur`, with the previous hole's guide (or the base
-/// plate) at `prev` and the next guide at `next` (read only where a tendon passes), and its change
-/// for pose changes `d` = `(d_prev, d_cur, d_next)`; `tensions_n` already scaled.
-pub(crate) fn guide_wrench<T: Scalar>(
+/// The angle between unit vectors `a` and `b`, rad, and its change.
+pub(crate) fn wrap_and_change<T: Scalar>(
+    a: &Vector3<T>,
+    da: &Vector3<T>,
+    b: &Vector3<T>,
+    db: &Vector3<T>,
+) -> (T, T) {
+    let w = a.cross(b);
+    let s = w.norm();
+    let c = a.dot(b);
+    let dc = da.dot(b) + a.dot(db);
+    let ds = if s > T::zero() {
+        w.dot(&(da.cross(b) + a.cross(db))) / s
+    } else {
+        T::zero()
+    };
+    (s.atan2(c), (c * ds - s * dc) / (s * s + c * c))
+}
+
+/// The capstan factor `exp(c theta)` across a wrap `theta` (with change `d_theta`) applied to a
+/// tension `tau` (change `d_tau`): the tension beyond, and its change.
+fn capstan<T: Scalar>(per_rad: T, theta: T, d_theta: T, tau: T, d_tau: T) -> (T, T) {
+    if per_rad == T::zero() {
+        return (tau, d_tau);
+    }
+    let f = (per_rad * theta).exp();
+    (tau * f, d_tau * f + tau * f * per_rad * d_theta)
+}
+
+/// What the tendons do at one guide: the wrench on the rod and each tendon's tension in the chord
+/// beyond (for the next guide), with their changes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GuideLoad<T> {
+    pub wrench: Wrench<T>,
+    pub d_wrench: Wrench<T>,
+    pub ahead_n: [T; MAX_TENDONS],
+    pub d_ahead_n: [T; MAX_TENDONS],
+}
+
+/// The tendons' load on guide `guide` at pose `cur`, with the previous hole's guide (or, at the
+/// first guide, the base plate) at `prev` and the next guide at `next` (read only where a tendon
+/// passes); `back_n` each tendon's tension in the chord arriving here (at the load scale), and
+/// their changes `d_back_n` with the pose changes `d = (d_prev, d_cur, d_next)`.
+pub(crate) fn guide_load<T: Scalar>(
     routed: &[Routed<T>],
-    tensions_n: &[T],
+    back_n: &[T],
     guide: usize,
     poses: [&GuidePose<T>; 3],
-    d: Option<[&PoseDelta<T>; 3]>,
-) -> (Wrench<T>, Wrench<T>) {
+    d: Option<([&PoseDelta<T>; 3], &[T])>,
+) -> GuideLoad<T> {
     let [prev, cur, next] = poses;
     let zero = PoseDelta::zero();
-    let [dp, dc, dn] = d.unwrap_or([&zero, &zero, &zero]);
-    let mut w = Wrench::zero();
-    let mut dw = Wrench::zero();
-    for (r, tau) in routed.iter().zip(tensions_n) {
+    let zeros = [T::zero(); MAX_TENDONS];
+    let ([dp, dc, dn], d_back) = d.unwrap_or(([&zero, &zero, &zero], &zeros));
+    let mut out = GuideLoad {
+        wrench: Wrench::zero(),
+        d_wrench: Wrench::zero(),
+        ahead_n: [T::zero(); MAX_TENDONS],
+        d_ahead_n: [T::zero(); MAX_TENDONS],
+    };
+    for (j, (r, tau)) in routed.iter().zip(back_n).enumerate() {
         let role = role(r, guide);
         if *tau == T::zero() || role == Role::None {
             continue;
         }
-        let tau = *tau;
+        let d_tau = d_back.get(j).copied().unwrap_or_else(T::zero);
         let here = hole(cur, &r.offset_m);
         let d_here = d_hole(cur, &r.offset_m, dc);
         let back = here - hole(prev, &r.offset_m);
-        let d_back = d_here - d_hole(prev, &r.offset_m, dp);
-        let (u_back, du_back) = unit_and_change(&back, &d_back);
-        let mut f = -u_back * tau;
-        let mut df = -du_back * tau;
+        let d_back_chord = d_here - d_hole(prev, &r.offset_m, dp);
+        let (u_back, du_back) = unit_and_change(&back, &d_back_chord);
+        // The base plate's hole: the tendon enters along the base tangent.
+        let (tau_b, d_tau_b) = if guide == 0 && r.capstan_per_rad != T::zero() {
+            let entry = prev.rotation.column(2).into_owned();
+            let (theta, d_theta) = wrap_and_change(&entry, &Vector3::zeros(), &u_back, &du_back);
+            capstan(r.capstan_per_rad, theta, d_theta, *tau, d_tau)
+        } else {
+            (*tau, d_tau)
+        };
+        let mut f = -u_back * tau_b;
+        let mut df = -du_back * tau_b - u_back * d_tau_b;
         if role == Role::Passes {
             let ahead = hole(next, &r.offset_m) - here;
             let d_ahead = d_hole(next, &r.offset_m, dn) - d_here;
             let (u_ahead, du_ahead) = unit_and_change(&ahead, &d_ahead);
-            f += u_ahead * tau;
-            df += du_ahead * tau;
+            let (tau_a, d_tau_a) = if r.capstan_per_rad == T::zero() {
+                (tau_b, d_tau_b)
+            } else {
+                let (theta, d_theta) = wrap_and_change(&u_back, &du_back, &u_ahead, &du_ahead);
+                capstan(r.capstan_per_rad, theta, d_theta, tau_b, d_tau_b)
+            };
+            f += u_ahead * tau_a;
+            df += du_ahead * tau_a + u_ahead * d_tau_a;
+            if let (Some(a), Some(da)) = (out.ahead_n.get_mut(j), out.d_ahead_n.get_mut(j)) {
+                *a = tau_a;
+                *da = d_tau_a;
+            }
         }
         let arm = cur.rotation * r.offset_m;
         let d_arm = cur.rotation * dc.rotation_rad.cross(&r.offset_m);
-        w.force_n += f;
-        w.moment_nm += arm.cross(&f);
-        dw.force_n += df;
-        dw.moment_nm += d_arm.cross(&f) + arm.cross(&df);
+        out.wrench.force_n += f;
+        out.wrench.moment_nm += arm.cross(&f);
+        out.d_wrench.force_n += df;
+        out.d_wrench.moment_nm += d_arm.cross(&f) + arm.cross(&df);
     }
-    (w, dw)
+    out
 }

@@ -6,7 +6,7 @@
 //! (warm), so the fit moves on the equilibrium manifold. Whitened residuals:
 //!
 //! - each taut tendon's displacement, `(d_hat(theta) - d) / s_d`, with
-//!   `d_hat = U0 - (feed + path) / (1 + tau / E_t A_t)` (`actuation.rs`); a tendon at zero tension
+//!   `d_hat = U0 - N`, `N` the unstretched length the equilibrium needs (`actuation.rs`); a tendon at zero tension
 //!   whose spool took in less than its path needs is slack, consistent whatever the slack: no residual;
 //! - each measured tension, `(tau - tau_measured) / s_tau`;
 //! - the prior on the tip force, `F / s_F`.
@@ -189,25 +189,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         TipLoad::force(Vector3::new(f(0), f(1), f(2)))
     }
 
-    /// The displacement a taut tendon `j` reads at tension `tau` and path `path`, and its change
-    /// with `tau` at fixed path and with the path.
-    fn predicted(&self, j: usize, tau: T, path: T) -> (T, T, T) {
-        let (Some(t), Some(rest)) = (self.tendons.tendons().get(j), self.tendons.rest_length_m(j))
-        else {
-            return (T::zero(), T::zero(), T::zero());
-        };
-        let spanned = t.feed_length_m + path;
-        match t.axial_stiffness_n {
-            Some(k) => {
-                let stretch = T::one() + tau / k;
-                (
-                    t.feed_length_m + rest - spanned / stretch,
-                    spanned / (k * stretch * stretch),
-                    -T::one() / stretch,
-                )
-            }
-            None => (rest - path, T::zero(), -T::one()),
-        }
+    /// The displacement a taut tendon `j` reads when the equilibrium needs the unstretched length
+    /// `needed_m`.
+    fn predicted(&self, j: usize, needed_m: T) -> T {
+        self.tendons.home_length_m(j) - needed_m
     }
 
     /// Solves the shape at `theta` (warm from `near`) and its residuals.
@@ -231,14 +216,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         let mut rows = Rows::zeros();
         let mut active = [false; MAX_ROWS];
         for j in 0..self.count {
-            let (Some(d), Some(path), Some(t)) = (
+            let (Some(d), Some(needed), Some(t)) = (
                 self.displacements_m.get(j),
-                solved.path_m.get(j),
+                solved.unstretched_m.get(j),
                 tau.get(j),
             ) else {
                 continue;
             };
-            let (d_hat, _, _) = self.predicted(j, *t, *path);
+            let d_hat = self.predicted(j, *needed);
             // Slack: no tension, and the spool took in less than the path needs.
             let slack = *t <= T::zero() && *d <= d_hat;
             if let (Some(r), Some(a)) = (rows.get_mut(j), active.get_mut(j)) {
@@ -285,10 +270,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
     }
 
     /// The whitened Jacobian at `fit` (inactive rows zero), and the tip's change with `theta`.
-    fn jacobian(
-        &mut self,
-        fit: &Fit<T>,
-    ) -> Result<Result<Linear<T>, Termination>, ModelError> {
+    fn jacobian(&mut self, fit: &Fit<T>) -> Result<Result<Linear<T>, Termination>, ModelError> {
         let load = self.load(&fit.theta);
         let sens = match sensitivity(
             self.model,
@@ -303,7 +285,6 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         };
         self.sweeps += sens.sweeps;
         let count = self.count;
-        let tau = self.tensions(&fit.theta);
         let mut jac = Jacobian::zeros();
         let mut d_tip = SMatrix::<T, 3, MAX_UNKNOWNS>::zeros();
         for c in 0..self.unknowns() {
@@ -311,18 +292,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 if !fit.active.get(j).copied().unwrap_or(false) {
                     continue;
                 }
-                let path = fit.solved.path_m.get(j).copied().unwrap_or_else(T::zero);
-                let t = tau.get(j).copied().unwrap_or_else(T::zero);
-                let (_, d_tau, d_path) = self.predicted(j, t, path);
-                let dp = if c < count {
-                    sens.d_path_d_tension.get((j, c)).copied()
+                let d_needed = if c < count {
+                    sens.d_length_d_tension.get((j, c)).copied()
                 } else {
-                    sens.d_path_d_force.get((j, c - count)).copied()
+                    sens.d_length_d_force.get((j, c - count)).copied()
                 }
                 .unwrap_or_else(T::zero);
-                let own = if c == j { d_tau } else { T::zero() };
                 if let Some(e) = jac.get_mut((j, c)) {
-                    *e = (own + d_path * dp) / self.s_d;
+                    *e = -d_needed / self.s_d;
                 }
             }
             if let Some(m) = self.measured
@@ -708,6 +685,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 equilibrium: eq,
                 tensions_n: tensions,
                 path_m: Vec::new(),
+                unstretched_m: Vec::new(),
             },
             states: Vec::new(),
             termination,

@@ -52,6 +52,9 @@ pub struct Tendon<T> {
     pub axial_stiffness_n: Option<T>,
     /// Free length from the spool to the base plate's hole, m (it stretches under tension too).
     pub feed_length_m: T,
+    /// Coulomb friction coefficient between the tendon and each hole it passes (the base plate's
+    /// and the guides'), for the capstan law; zero: frictionless.
+    pub friction_coefficient: T,
 }
 
 impl<T: Scalar> Tendon<T> {
@@ -64,6 +67,7 @@ impl<T: Scalar> Tendon<T> {
             end_m,
             axial_stiffness_n: None,
             feed_length_m: T::zero(),
+            friction_coefficient: T::zero(),
         }
     }
 
@@ -73,11 +77,25 @@ impl<T: Scalar> Tendon<T> {
     }
 }
 
-/// A tendon checked against a model: its offset and the index of its termination guide.
+/// Which way a tendon slides through its holes, which sets the sign of the capstan friction: the
+/// tension falls away from the spool while it pulls in, and rises while it pays out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Sliding {
+    /// The spool takes the tendon in (loading): each hole passed lowers the tension by `exp(-mu theta)`.
+    #[default]
+    In,
+    /// The spool pays the tendon out (unloading): each hole raises it by `exp(mu theta)`.
+    Out,
+}
+
+/// A tendon checked against a model: its offset, the index of its termination guide, and the
+/// capstan exponent per radian of wrap, `-mu` pulling in and `mu` paying out.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Routed<T> {
     pub offset_m: Vector3<T>,
     pub end_guide: usize,
+    pub capstan_per_rad: T,
 }
 
 /// The tendons of one model, checked against its guides.
@@ -135,6 +153,7 @@ impl<T: Scalar> Tendons<T> {
             finite(tendon.hole_m.y, "tendon hole")?;
             finite(tendon.end_m, "tendon termination")?;
             non_negative(tendon.feed_length_m, "tendon feed length")?;
+            non_negative(tendon.friction_coefficient, "tendon friction coefficient")?;
             if let Some(k) = tendon.axial_stiffness_n {
                 positive(k, "tendon axial stiffness")?;
             }
@@ -151,10 +170,24 @@ impl<T: Scalar> Tendons<T> {
                 .push(Routed {
                     offset_m: tendon.offset_local_m(),
                     end_guide,
+                    capstan_per_rad: -tendon.friction_coefficient,
                 })
                 .map_err(|_| ModelError::Capacity("tendons"))?;
         }
         Ok(out)
+    }
+
+    /// Sets which way tendon `tendon` slides (the sign of its friction); `false` if there is no such
+    /// tendon. Without friction it changes nothing.
+    pub fn set_sliding(&mut self, tendon: usize, sliding: Sliding) -> bool {
+        let (Some(r), Some(t)) = (self.routed.get_mut(tendon), self.tendons.get(tendon)) else {
+            return false;
+        };
+        r.capstan_per_rad = match sliding {
+            Sliding::In => -t.friction_coefficient,
+            Sliding::Out => t.friction_coefficient,
+        };
+        true
     }
 
     /// The tendons, in the order given.

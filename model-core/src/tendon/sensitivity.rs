@@ -1,5 +1,5 @@
 //! How an equilibrium under tendons moves with the tensions and the tip force: the changes of the
-//! path lengths and of the tip position, by forward differences of warm solves (each a few sweeps
+//! unstretched lengths the tendons need (path and stretch together) and of the tip position, by forward differences of warm solves (each a few sweeps
 //! from the equilibrium it perturbs). Both the displacement-controlled solve and the inverse need
 //! them.
 //!
@@ -18,12 +18,12 @@ use crate::model::Model;
 use crate::report::Termination;
 use crate::shooting::ShootingSettings;
 
-/// The changes of the path lengths (rows, m) and of the tip position (m) per unit change of each
-/// tension (N) and tip force component (N).
+/// The changes of the tendons' needed unstretched lengths (rows, m) and of the tip position (m) per
+/// unit change of each tension (N) and tip force component (N).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sensitivity<T> {
-    pub d_path_d_tension: SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
-    pub d_path_d_force: SMatrix<T, MAX_TENDONS, 3>,
+    pub d_length_d_tension: SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+    pub d_length_d_force: SMatrix<T, MAX_TENDONS, 3>,
     pub d_tip_d_tension: SMatrix<T, 3, MAX_TENDONS>,
     pub d_tip_d_force: SMatrix<T, 3, 3>,
     /// Sweeps spent.
@@ -64,8 +64,8 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
     settings: &ShootingSettings<T>,
 ) -> Result<Result<Sensitivity<T>, Termination>, ModelError> {
     let mut out = Sensitivity {
-        d_path_d_tension: SMatrix::zeros(),
-        d_path_d_force: SMatrix::zeros(),
+        d_length_d_tension: SMatrix::zeros(),
+        d_length_d_force: SMatrix::zeros(),
         d_tip_d_tension: SMatrix::zeros(),
         d_tip_d_force: SMatrix::zeros(),
         sweeps: 0,
@@ -93,21 +93,24 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
         let tau = tau.get(..count).unwrap_or(&[]);
         let moved = model.solve_tendons(tendons, tau, &perturbed, Some(at), settings)?;
         out.sweeps += u32::from(moved.equilibrium.report.sweeps);
-        if !moved.is_success() || moved.path_m.len() != count || at.path_m.len() != count {
+        if !moved.is_success()
+            || moved.unstretched_m.len() != count
+            || at.unstretched_m.len() != count
+        {
             return Ok(Err(moved.equilibrium.report.termination));
         }
         let d_tip = (moved.equilibrium.tip_position_m - base_tip) / h;
-        let d_path = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
-            match (moved.path_m.get(j), at.path_m.get(j)) {
+        let d_length = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
+            match (moved.unstretched_m.get(j), at.unstretched_m.get(j)) {
                 (Some(a), Some(b)) => (*a - *b) / h,
                 _ => T::zero(),
             }
         });
         if c < count {
-            out.d_path_d_tension.set_column(c, &d_path);
+            out.d_length_d_tension.set_column(c, &d_length);
             out.d_tip_d_tension.set_column(c, &d_tip);
         } else {
-            out.d_path_d_force.set_column(c - count, &d_path);
+            out.d_length_d_force.set_column(c - count, &d_length);
             out.d_tip_d_force.set_column(c - count, &d_tip);
         }
     }
