@@ -4,8 +4,8 @@
 #   (host tests and target build), the QEMU images (selftest, golden, e2e, the RTIC estimator image
 #   and its sampling through a cold estimate, bench, and the fault and panic images that must exit
 #   with failure rather than hang), the board image (build only: it needs the real STM32F405's
-#   clock tree), and the estimator image's flash/RAM budget against the committed expected values
-#   in expected/.
+#   clock tree), the tendon image (golden tendon rows and a recorded actuation), and the estimator
+#   and tendon images' flash/RAM budgets against the committed expected values in expected/.
 #
 # Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it installs
 # nothing and says what is missing. Environment:
@@ -21,6 +21,9 @@ RELEASE="target/$TARGET/release"
 OUT="target/test-out"
 FLASH_BUDGET_B=65536
 RAM_BUDGET_B=16384
+# The tendon image's budget: an STM32G4-class motor-control MCU (128 KiB flash, 32 KiB RAM).
+TENDON_FLASH_BUDGET_B=131072
+TENDON_RAM_BUDGET_B=32768
 
 missing=()
 command -v cargo >/dev/null || missing+=("cargo (the Rust toolchain pinned by ../rust-toolchain.toml)")
@@ -111,44 +114,72 @@ elf_sizes() {
     echo "$flash $ram"
 }
 
-budget() {
-    local elf="$RELEASE/estimator" line flash static_ram stack reported_flash reported_static
+# defmt_flash_bytes ELF: bytes of `.defmt*` sections placed in flash.
+defmt_flash_bytes() {
+    local total=0 size
+    while read -r size; do
+        total=$((total + 0x$size))
+    done < <(readelf -SW "$1" | awk '{
+        for (i = 1; i <= NF; i++) if ($i ~ /^\.defmt/ && $(i + 2) ~ /^080/) print $(i + 4)
+    }')
+    echo "$total"
+}
+
+# image_budget IMAGE FLASH_BUDGET RAM_BUDGET: the image's flash and RAM (static + the stack's
+# high-water mark it reported) within budget and equal to expected/IMAGE.size.
+image_budget() {
+    local image="$1" flash_budget="$2" ram_budget="$3"
+    local elf="$RELEASE/$image" line flash static_ram stack reported_flash reported_static
     read -r flash static_ram < <(elf_sizes "$elf")
-    line="$(grep -E '^memory: ' "$OUT/estimator.out" || true)"
+    line="$(grep -E '^memory: ' "$OUT/$image.out" || true)"
     if [[ -z "$line" ]]; then
-        echo "the estimator image reported no memory line"
+        echo "the $image image reported no memory line"
         return 1
     fi
     # memory: flash F B, static RAM S B, stack high-water K B, RAM total T B
     read -r reported_flash reported_static stack < <(sed -E \
         's/^memory: flash ([0-9]+) B, static RAM ([0-9]+) B, stack high-water ([0-9]+) B.*/\1 \2 \3/' <<<"$line")
-    if [[ "$reported_flash" != "$flash" || "$reported_static" != "$static_ram" ]]; then
+    # An image without defmt's linker script (no defmt logger) keeps defmt's version and encoding
+    # markers (`.defmt.end`, 2 B) in flash after everything the linker symbols delimit.
+    local markers
+    markers="$(defmt_flash_bytes "$elf")"
+    if [[ "$((reported_flash + markers))" != "$flash" || "$reported_static" != "$static_ram" ]]; then
         echo "readelf ($flash B flash, $static_ram B RAM) and the image's linker symbols" \
-            "($reported_flash, $reported_static) disagree"
+            "($reported_flash + $markers B of defmt markers, $reported_static) disagree"
         return 1
     fi
     local ram=$((static_ram + stack))
     {
-        echo "# estimator image, bytes (firmware/test.sh; budget $FLASH_BUDGET_B flash, $RAM_BUDGET_B RAM)"
+        echo "# $image image, bytes (firmware/test.sh; budget $flash_budget flash, $ram_budget RAM)"
         echo "flash $flash"
         echo "static_ram $static_ram"
         echo "stack_high_water $stack"
         echo "ram_total $ram"
-    } >"$OUT/estimator.size"
-    cat "$OUT/estimator.size"
-    echo "all images (flash B, static RAM B):"
-    local image
-    for image in selftest golden e2e estimator bench; do
-        [[ -f "$RELEASE/$image" ]] && printf '  %-10s %s\n' "$image" "$(elf_sizes "$RELEASE/$image")"
-    done
+    } >"$OUT/$image.size"
+    cat "$OUT/$image.size"
     local ok=0
-    compare_expected expected/estimator.size "$OUT/estimator.size" || ok=1
-    if ((flash > FLASH_BUDGET_B || ram > RAM_BUDGET_B)); then
-        echo "OVER BUDGET: flash $flash of $FLASH_BUDGET_B B, RAM $ram of $RAM_BUDGET_B B" \
+    compare_expected "expected/$image.size" "$OUT/$image.size" || ok=1
+    if ((flash > flash_budget || ram > ram_budget)); then
+        echo "OVER BUDGET: flash $flash of $flash_budget B, RAM $ram of $ram_budget B" \
             "(static $static_ram + stack $stack)"
         [[ "${FIRMWARE_BUDGET:-enforce}" == report ]] || ok=1
     fi
     return "$ok"
+}
+
+budget() {
+    local ok=0
+    image_budget estimator "$FLASH_BUDGET_B" "$RAM_BUDGET_B" || ok=1
+    echo "all images (flash B, static RAM B):"
+    local image
+    for image in selftest golden e2e estimator bench tendon; do
+        [[ -f "$RELEASE/$image" ]] && printf '  %-10s %s\n' "$image" "$(elf_sizes "$RELEASE/$image")"
+    done
+    return "$ok"
+}
+
+tendon_budget() {
+    image_budget tendon "$TENDON_FLASH_BUDGET_B" "$TENDON_RAM_BUDGET_B"
 }
 
 bench_expected() {
@@ -173,11 +204,14 @@ check "QEMU estimator: RTIC sampler at 1 kHz and the production loop with defmt"
 check "QEMU estimator: the sampler keeps 1 kHz of virtual time through the cold estimate" \
     grep -E '^estimator: sampling during the cold estimate: [0-9]+ samples in [0-9]+ us of virtual time \(1 kHz\)$' \
     "$OUT/estimator.out"
+check "QEMU tendon: golden tendon rows from displacements and a recorded actuation with a slack tendon, f32" \
+    run_image tendon 0 '^tendon: [0-9]+ passed, 0 failed$'
 check "QEMU bench: instruction counts" run_image bench 0 '^bench case=update_warm'
 check "bench instruction counts match expected/bench.run" bench_expected
 check "QEMU fault: HardFault reports and exits 1" run_image fault 1 '^hard fault: pc'
 check "QEMU panic: panic reports and exits 1" run_image panic 1 'panicked at'
 check "estimator image within budget, sizes match expected/estimator.size" budget
+check "tendon image within its budget (128 KiB, 32 KiB), sizes match expected/tendon.size" tendon_budget
 # Last: the `board` feature adds stm32f4xx-hal to the library's dependencies, and building it in
 # between would rebuild the QEMU images (which do not use it).
 check "build the board image (build only: it needs the real STM32F405's clock tree)" \

@@ -409,12 +409,10 @@ fn tendon_displacement_round_trip<T: Scalar>(tension_tol_n: f64, tip_tol_m: f64)
         for (j, (found, true_tau)) in back.solved.tensions_n.iter().zip(tau).enumerate() {
             let off = (found.to_f64() - true_tau).abs();
             assert!(off < tension_tol_n, "{tau:?} tendon {j}: {off:e} N off");
-            let state = if true_tau > 0.0 {
-                TendonState::Taut
-            } else {
-                TendonState::Slack
-            };
-            assert_eq!(back.states[j], state, "{tau:?} tendon {j}");
+            // At zero tension a tendon is just taut and just slack: either state is right.
+            if true_tau > 0.0 {
+                assert_eq!(back.states[j], TendonState::Taut, "{tau:?} tendon {j}");
+            }
         }
         let tip = (back.solved.equilibrium.tip_position_m - truth.equilibrium.tip_position_m)
             .map(Scalar::to_f64)
@@ -735,5 +733,59 @@ fn tendon_friction_round_trip_and_hysteresis_in_displacement_control() {
     // Its equilibrium needs exactly the lengths the spools left.
     for (a, b) in displacements_of(&set, &unloading.solved).iter().zip(&d) {
         assert!((a - b).abs() < 1e-10, "{a} vs {b}");
+    }
+}
+
+/// The warm inverse of a control loop: each tick starts from the last estimate and tracks the
+/// actuation and the tip force within its reported uncertainty, in a fraction of the cold sweeps.
+#[test]
+fn tendon_inverse_warm_updates_track_a_moving_load() {
+    let inverse = TendonInverseSettings::default();
+    let std = [0.01; 3];
+    let mut previous = None;
+    let mut cold_sweeps = 0;
+    for tick in 0..5 {
+        let k = tick as f64;
+        let tau = [2.0 + 0.2 * k, 1.0 + 0.1 * k, 0.5];
+        let force = [0.0, -0.05 - 0.01 * k, 0.02];
+        let (model, set, truth_eq, d) = truth(tau, force);
+        let measured = MeasuredTensions {
+            tensions_n: &tau,
+            std_n: &std,
+        };
+        let est = model
+            .estimate_tendons(
+                &set,
+                &d,
+                Some(measured),
+                previous.as_ref(),
+                &settings(),
+                &inverse,
+            )
+            .unwrap();
+        assert!(est.is_success(), "tick {tick}: {:?}", est.termination);
+        let q = &est.quality;
+        for (i, want) in force.iter().enumerate() {
+            assert!(
+                (est.force_n()[i] - want).abs() < 3.0 * q.force_std_n[i] + 1e-9,
+                "tick {tick}"
+            );
+        }
+        let tip =
+            (est.solved.equilibrium.tip_position_m - truth_eq.equilibrium.tip_position_m).norm();
+        assert!(
+            tip < 3.0 * q.tip_std_m.norm() + 1e-9,
+            "tick {tick}: tip {tip:e}"
+        );
+        if tick == 0 {
+            cold_sweeps = est.sweeps;
+        } else {
+            assert!(
+                est.sweeps * 3 < cold_sweeps,
+                "tick {tick}: {} sweeps, cold {cold_sweeps}",
+                est.sweeps
+            );
+        }
+        previous = Some(est);
     }
 }

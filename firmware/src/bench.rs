@@ -18,6 +18,15 @@
 //!   against a forward solve of the same model),
 //! * `update_one_sweep`: the same with a budget of one sweep (model-core's hard real-time mode: one
 //!   six-tangent sweep and one Newton step per update).
+//!
+//! And the tendon-driven robot ([`crate::tendon`]) at its loop's step count:
+//! * `tendon_forward_cold`: a cold forward solve from the recorded actuation's first tensions
+//!   (`Model::solve_tendons`),
+//! * `tendon_displacement_cold`: a cold displacement-controlled solve of its first displacements
+//!   (`Model::solve_displacements`: the tensions found),
+//! * `tendon_update_warm`: the warm updates along the recorded actuation
+//!   (`Model::update_displacements`; the costliest reported, with the worst tip error against the
+//!   f64 reference).
 
 use model_checks::reference::golden_bench;
 use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
@@ -224,6 +233,89 @@ pub fn run(
             ));
         }
     }
+    tendon_cases(measure, report)
+}
+
+/// The tendon-driven robot's cases (see the module's documentation).
+fn tendon_cases(
+    measure: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+    report: &mut dyn FnMut(&BenchLine),
+) -> Result<(), ModelError> {
+    use crate::tendon::{TRAJECTORY, displacements_m, robot};
+    use model_core::{DisplacementSettings, DisplacementSolve, TendonEquilibrium};
+
+    let (model, tendons) = robot(true)?;
+    let settings = ShootingSettings::default();
+    let line = |case, cost, sweeps: u32, converged, tip_error_m| BenchLine {
+        case,
+        steps_per_section: crate::tendon::STEPS_PER_SECTION,
+        total_steps: model.plan().total_steps(),
+        cost,
+        sweeps: u16::try_from(sweeps).unwrap_or(u16::MAX),
+        converged,
+        tip_error_m,
+    };
+    let tip_error = |solved: &TendonEquilibrium<f32>, tick: usize| {
+        let want = TRAJECTORY.get(tick).map_or([0.0; 3], |r| r.tip_m);
+        let tip = solved.equilibrium.tip_position_m;
+        (Vector3::new(tip.x, tip.y, tip.z)
+            - Vector3::new(want[0] as f32, want[1] as f32, want[2] as f32))
+        .norm()
+    };
+
+    let tensions = TRAJECTORY
+        .first()
+        .map_or([0.0; 3], |r| r.tensions_n.map(|t| t as f32));
+    let mut forward = None;
+    let cost = measure(&mut || {
+        forward = Some(model.solve_tendons(&tendons, &tensions, &TipLoad::zero(), None, &settings));
+    });
+    let forward = forward.unwrap_or(Err(ModelError::Empty("measurement")))?;
+    report(&line(
+        "tendon_forward_cold",
+        cost,
+        u32::from(forward.equilibrium.report.sweeps),
+        forward.is_success(),
+        tip_error(&forward, 0),
+    ));
+
+    let mut previous: Option<DisplacementSolve<f32>> = None;
+    let mut worst = Worst::default();
+    let mut worst_sweeps = 0u32;
+    for tick in 0..TRAJECTORY.len() {
+        let d = displacements_m(tick).map(|x| x as f32);
+        let mut out = None;
+        let zero = TipLoad::zero();
+        let control = DisplacementSettings::default();
+        let cost = measure(&mut || {
+            out = Some(match &previous {
+                None => model.solve_displacements(&tendons, &d, &zero, None, &settings, &control),
+                Some(p) => model.update_displacements(&tendons, &d, &zero, p, &settings, &control),
+            });
+        });
+        let out = out.unwrap_or(Err(ModelError::Empty("measurement")))?;
+        let error = tip_error(&out.solved, tick);
+        if tick == 0 {
+            report(&line(
+                "tendon_displacement_cold",
+                cost,
+                out.sweeps,
+                out.is_success(),
+                error,
+            ));
+        } else {
+            worst.add(cost, 0, out.is_success(), error);
+            worst_sweeps = worst_sweeps.max(out.sweeps);
+        }
+        previous = Some(out);
+    }
+    report(&line(
+        "tendon_update_warm",
+        worst.cost,
+        worst_sweeps,
+        worst.all_done,
+        worst.tip_error_m,
+    ));
     Ok(())
 }
 
@@ -283,7 +375,7 @@ mod tests {
             },
             &mut |l| lines.push(*l),
         )?;
-        assert_eq!(lines.len(), 7 * STEP_COUNTS.len());
+        assert_eq!(lines.len(), 7 * STEP_COUNTS.len() + 3);
         for l in &lines {
             println!("{l:?}");
             if !must_converge(l.case) {

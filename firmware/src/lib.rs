@@ -16,6 +16,7 @@
 //! | the recorded trajectory and its f64 reference | [`fixture`] |
 //! | end-to-end and golden checks run by the images | [`checks`] |
 //! | instruction-count benchmarks | [`bench`] |
+//! | the tendon-driven robot: displacement control in f32, its golden and trajectory checks | [`tendon`] |
 
 #![cfg_attr(not(test), no_std)]
 
@@ -28,6 +29,7 @@ pub mod fixture;
 pub mod sampler;
 pub mod spool;
 pub mod stepper;
+pub mod tendon;
 pub mod validate;
 
 #[cfg(test)]

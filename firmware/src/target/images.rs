@@ -179,6 +179,63 @@ pub fn golden() -> bool {
     summary.failed == 0 && summary.passed > 0
 }
 
+/// The tendon-driven robot in f32: the golden tendon rows from their displacements, then the
+/// recorded actuation with warm updates, each against its f64 reference.
+pub fn tendon() -> bool {
+    let Some(peripherals) = cortex_m::Peripherals::take() else {
+        return false;
+    };
+    let counter = Counter::start(peripherals.SYST);
+    let clock = || counter::instructions(counter.ticks());
+    hprintln!(
+        "tendon: f32 displacement control at {} steps; tolerances tip {} nm, tension {} uN",
+        crate::tendon::STEPS_PER_SECTION,
+        micro(crate::tendon::TIP_TOLERANCE_M, 1e9),
+        micro(crate::tendon::TENSION_TOLERANCE_N, 1e6)
+    );
+    let line = |what: &str, c: &crate::tendon::CaseCheck| {
+        hprintln!(
+            "{} {:2} tip_err_nm {:6} tension_err_uN {:6} states {} sweeps {:4} instructions {:9} {}",
+            what,
+            c.index,
+            micro(c.tip_error_m, 1e9),
+            micro(c.tension_error_n, 1e6),
+            if c.states_match { "match" } else { "DIFFER" },
+            c.sweeps,
+            c.cost,
+            if c.passed { "pass" } else { "FAIL" }
+        );
+    };
+    let golden = crate::tendon::run_golden(&clock, &mut |c| line("golden row", c));
+    let trajectory = crate::tendon::run_trajectory(&clock, &mut |c| line("tick", c));
+    let (Ok(golden), Ok(trajectory)) = (golden, trajectory) else {
+        hprintln!("tendon: setup refused");
+        return false;
+    };
+    hprintln!(
+        "worst tip error {} nm, worst tension error {} uN; cold solve {} instructions, most per warm update {}",
+        micro(
+            golden.worst_tip_error_m.max(trajectory.worst_tip_error_m),
+            1e9
+        ),
+        micro(
+            golden
+                .worst_tension_error_n
+                .max(trajectory.worst_tension_error_n),
+            1e6
+        ),
+        trajectory.cold_cost,
+        trajectory.max_warm_cost
+    );
+    report_memory();
+    let (passed, failed) = (
+        golden.passed + trajectory.passed,
+        golden.failed + trajectory.failed,
+    );
+    hprintln!("tendon: {} passed, {} failed", passed, failed);
+    failed == 0 && passed > 0
+}
+
 /// Takes the undefined-instruction trap: the HardFault handler must report it and exit with 1.
 pub fn fault() -> bool {
     hprintln!("fault: executing an undefined instruction");

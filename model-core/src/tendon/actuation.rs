@@ -73,6 +73,13 @@ pub struct DisplacementSolve<T> {
     pub iterations: u16,
     /// Sweeps spent, forward solves and sensitivities together.
     pub sweeps: u32,
+    /// How the needed unstretched lengths change with the tensions near the answer, m/N (forward
+    /// differences, refined by Broyden updates along the steps): what a warm update
+    /// ([`Model::update_displacements`]) starts from instead of differencing again.
+    pub d_length_d_tension: SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+    /// Whether [`DisplacementSolve::d_length_d_tension`] holds a sensitivity (not after a failure
+    /// before the first one).
+    pub has_sensitivity: bool,
 }
 
 impl<T: Scalar> DisplacementSolve<T> {
@@ -129,6 +136,55 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         displacements_m: &[T],
         load: &TipLoad<T>,
         start: Option<&TendonEquilibrium<T>>,
+        shooting: &ShootingSettings<T>,
+        settings: &DisplacementSettings<T>,
+    ) -> Result<DisplacementSolve<T>, ModelError> {
+        self.displacement_solve(
+            tendons,
+            displacements_m,
+            load,
+            start,
+            None,
+            shooting,
+            settings,
+        )
+    }
+
+    /// The warm update of a control loop: the tensions for new displacements, from `previous`'s
+    /// equilibrium and its sensitivity (Broyden-updated along the steps; differenced afresh only
+    /// when a step fails). Same outcome as [`Model::solve_displacements`], at a fraction of the
+    /// sweeps.
+    pub fn update_displacements(
+        &self,
+        tendons: &Tendons<T>,
+        displacements_m: &[T],
+        load: &TipLoad<T>,
+        previous: &DisplacementSolve<T>,
+        shooting: &ShootingSettings<T>,
+        settings: &DisplacementSettings<T>,
+    ) -> Result<DisplacementSolve<T>, ModelError> {
+        let sensitivity = previous
+            .has_sensitivity
+            .then_some(&previous.d_length_d_tension);
+        self.displacement_solve(
+            tendons,
+            displacements_m,
+            load,
+            Some(&previous.solved),
+            sensitivity,
+            shooting,
+            settings,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn displacement_solve(
+        &self,
+        tendons: &Tendons<T>,
+        displacements_m: &[T],
+        load: &TipLoad<T>,
+        start: Option<&TendonEquilibrium<T>>,
+        sensitivity_start: Option<&SMatrix<T, MAX_TENDONS, MAX_TENDONS>>,
         shooting: &ShootingSettings<T>,
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
@@ -194,6 +250,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
 
         let mut termination = Termination::IterationLimit;
         let mut iterations = 0u16;
+        // d N / d tau, and whether it was differenced at the current point (else carried and
+        // Broyden-updated).
+        let mut sens = sensitivity_start.copied();
+        let mut fresh = false;
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
                 termination = current.equilibrium.report.termination;
@@ -206,25 +266,28 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 break;
             }
             iterations += 1;
-            let sens = match sensitivity(self, tendons, &current, load, false, shooting)? {
-                Ok(s) => s,
-                Err(t) => {
-                    termination = t;
-                    break;
-                }
+            let s = match sens {
+                Some(s) => s,
+                None => match sensitivity(self, tendons, &current, load, false, shooting)? {
+                    Ok(d) => {
+                        sweeps += d.sweeps;
+                        fresh = true;
+                        sens = Some(d.d_length_d_tension);
+                        d.d_length_d_tension
+                    }
+                    Err(t) => {
+                        termination = t;
+                        break;
+                    }
+                },
             };
-            sweeps += sens.sweeps;
             // d FB / d tau, with d phi / d tau = -d (needed unstretched length) / d tau.
             let jacobian = SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
                 if j >= count || i >= count {
                     return if i == j { T::one() } else { T::zero() };
                 }
                 let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
-                let d_phi = -sens
-                    .d_length_d_tension
-                    .get((j, i))
-                    .copied()
-                    .unwrap_or_else(T::zero);
+                let d_phi = -s.get((j, i)).copied().unwrap_or_else(T::zero);
                 let d_tau = if i == j { T::one() } else { T::zero() };
                 da * d_tau / tau_scale + db * d_phi / radius
             });
@@ -233,7 +296,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 break;
             };
             // Backtracking on |r|: the full step, then halves.
-            let mut accepted = false;
+            let mut accepted = None;
             let mut alpha = T::one();
             for _ in 0..12 {
                 let mut trial = tau;
@@ -251,22 +314,52 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 if moved.is_success() {
                     let (r_trial, _, _) = residual_of(&moved, &trial);
                     if r_trial.amax() < size {
-                        tau = trial;
-                        current = moved;
-                        accepted = true;
+                        accepted = Some((trial, moved));
                         break;
                     }
                 }
                 alpha *= T::lit(0.5);
             }
-            if !accepted {
-                // At the floor of the forward solves' rounding: an answer if within tolerance.
-                termination = if size <= settings.tolerance {
-                    Termination::Converged
-                } else {
-                    Termination::Stalled
-                };
-                break;
+            match accepted {
+                Some((trial, moved)) => {
+                    // A carried sensitivity that gained less than a factor ten is differenced
+                    // afresh next time: Broyden's secants alone converge slowly near the answer.
+                    let (r_new, _, _) = residual_of(&moved, &trial);
+                    let slow = !fresh && r_new.amax() > size * T::lit(0.1);
+                    // Broyden: the secant along the step taken.
+                    let dt = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
+                        trial.get(j).copied().unwrap_or_else(T::zero)
+                            - tau.get(j).copied().unwrap_or_else(T::zero)
+                    });
+                    let dn = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
+                        match (moved.unstretched_m.get(j), current.unstretched_m.get(j)) {
+                            (Some(a), Some(b)) => *a - *b,
+                            _ => T::zero(),
+                        }
+                    });
+                    let norm2 = dt.norm_squared();
+                    if slow {
+                        sens = None;
+                    } else if norm2 > T::zero() {
+                        sens = Some(s + (dn - s * dt) * dt.transpose() / norm2);
+                    }
+                    fresh = false;
+                    tau = trial;
+                    current = moved;
+                }
+                None if !fresh => {
+                    // A carried sensitivity misled the step: difference afresh and retry.
+                    sens = None;
+                }
+                None => {
+                    // At the floor of the forward solves' rounding: an answer if within tolerance.
+                    termination = if size <= settings.tolerance {
+                        Termination::Converged
+                    } else {
+                        Termination::Stalled
+                    };
+                    break;
+                }
             }
         }
         let (r, _, phi) = residual_of(&current, &tau);
@@ -279,7 +372,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut slack_m = Vec::new();
         let mut states = Vec::new();
         for (t, p) in tau.iter().zip(&phi).take(count) {
-            let slack = *t <= T::zero();
+            // The side of the complementarity the answer is on: more slack than tension (both
+            // scaled as in the residual) is slack, whatever rounding left of the tension.
+            let slack = *t / tau_scale < *p / radius;
             // Cannot overflow: at most MAX_TENDONS.
             let _ = slack_m.push(if slack { p.max(T::zero()) } else { T::zero() });
             let _ = states.push(if slack {
@@ -295,6 +390,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             termination,
             iterations,
             sweeps,
+            has_sensitivity: sens.is_some(),
+            d_length_d_tension: sens.unwrap_or_else(SMatrix::zeros),
         })
     }
 }

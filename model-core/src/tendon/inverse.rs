@@ -23,8 +23,10 @@
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use super::sensitivity::sensitivity;
-use super::{DisplacementSettings, MAX_TENDONS, TendonEquilibrium, TendonState, Tendons};
+use super::sensitivity::{Sensitivity, sensitivity};
+use super::{
+    DisplacementSettings, DisplacementSolve, MAX_TENDONS, TendonEquilibrium, TendonState, Tendons,
+};
 use crate::Scalar;
 use crate::error::{ModelError, finite, positive};
 use crate::inverse::Determination;
@@ -44,6 +46,10 @@ type Rows<T> = SVector<T, MAX_ROWS>;
 type Jacobian<T> = SMatrix<T, MAX_ROWS, MAX_UNKNOWNS>;
 /// The whitened Jacobian and the tip's change with the unknowns.
 type Linear<T> = (Jacobian<T>, SMatrix<T, 3, MAX_UNKNOWNS>);
+/// The reduced problem's rows: the measured tensions' misfits (first `MAX_TENDONS`), the force
+/// prior (last three).
+type ReducedRows<T> = SVector<T, { MAX_TENDONS + 3 }>;
+type ReducedJacobian<T> = SMatrix<T, { MAX_TENDONS + 3 }, 3>;
 
 /// Settings of the tendon inverse.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -269,21 +275,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         }))
     }
 
-    /// The whitened Jacobian at `fit` (inactive rows zero), and the tip's change with `theta`.
-    fn jacobian(&mut self, fit: &Fit<T>) -> Result<Result<Linear<T>, Termination>, ModelError> {
-        let load = self.load(&fit.theta);
-        let sens = match sensitivity(
-            self.model,
-            self.tendons,
-            &fit.solved,
-            &load,
-            true,
-            &self.shooting,
-        )? {
-            Ok(s) => s,
-            Err(t) => return Ok(Err(t)),
-        };
-        self.sweeps += sens.sweeps;
+    /// The whitened Jacobian at `fit` (inactive rows zero), and the tip's change with `theta`, from
+    /// the sensitivity `sens` there.
+    fn jacobian(&self, fit: &Fit<T>, sens: &Sensitivity<T>) -> Linear<T> {
         let count = self.count;
         let mut jac = Jacobian::zeros();
         let mut d_tip = SMatrix::<T, 3, MAX_UNKNOWNS>::zeros();
@@ -325,7 +319,28 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 }
             }
         }
-        Ok(Ok((jac, d_tip)))
+        (jac, d_tip)
+    }
+
+    /// The sensitivity at `solved` under the tip force `force_n`, its sweeps counted.
+    fn sensitivity(
+        &mut self,
+        solved: &TendonEquilibrium<T>,
+        force_n: &Vector3<T>,
+    ) -> Result<Result<Sensitivity<T>, Termination>, ModelError> {
+        let load = TipLoad::force(*force_n);
+        let sens = sensitivity(
+            self.model,
+            self.tendons,
+            solved,
+            &load,
+            true,
+            &self.shooting,
+        )?;
+        if let Ok(s) = &sens {
+            self.sweeps += s.sweeps;
+        }
+        Ok(sens)
     }
 
     fn cost(fit: &Fit<T>) -> T {
@@ -348,86 +363,219 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         (T::default_epsilon() * T::lit(1e4)).max(T::lit(1e-5))
     }
 
-    /// Projected Levenberg-Marquardt from `fit`.
-    fn fit(&mut self, mut fit: Fit<T>) -> Result<Outcome<T>, ModelError> {
-        let n = self.unknowns();
+    /// The tensions the displacements give under the tip force `force_n` (warm from `previous`
+    /// when given, else from `near`).
+    fn tensions_at(
+        &mut self,
+        force_n: &Vector3<T>,
+        previous: Option<&DisplacementSolve<T>>,
+        near: Option<&TendonEquilibrium<T>>,
+    ) -> Result<DisplacementSolve<T>, ModelError> {
+        let load = TipLoad::force(*force_n);
+        let control = DisplacementSettings::default();
+        let out = match previous {
+            Some(p) => self.model.update_displacements(
+                self.tendons,
+                self.displacements_m,
+                &load,
+                p,
+                &self.shooting,
+                &control,
+            )?,
+            None => self.model.solve_displacements(
+                self.tendons,
+                self.displacements_m,
+                &load,
+                near,
+                &self.shooting,
+                &control,
+            )?,
+        };
+        self.sweeps += out.sweeps;
+        Ok(out)
+    }
+
+    /// The reduced residuals at `disp` (its tensions and the tip force `force_n`): the measured
+    /// tensions' misfits and the force prior. The displacements hold exactly (the tensions are
+    /// the ones they give), so only these rows remain.
+    fn reduced_rows(&self, disp: &DisplacementSolve<T>, force_n: &Vector3<T>) -> ReducedRows<T> {
+        let mut rows = ReducedRows::zeros();
+        if let Some(m) = self.measured {
+            for (j, r) in rows.iter_mut().enumerate().take(self.count) {
+                let (Some(t), Some(v), Some(s)) = (
+                    disp.solved.tensions_n.get(j),
+                    m.tensions_n.get(j),
+                    m.std_n.get(j),
+                ) else {
+                    continue;
+                };
+                *r = (*t - *v) / *s;
+            }
+        }
+        for (i, f) in force_n.iter().enumerate() {
+            if let Some(r) = rows.get_mut(MAX_TENDONS + i) {
+                *r = *f / self.settings.force_prior_std_n;
+            }
+        }
+        rows
+    }
+
+    /// The reduced Jacobian: `d tau / d F` of the tensions the displacements give (the implicit
+    /// function theorem on the taut tendons' `N(tau, F) = U0 - d`; a slack tendon's tension stays
+    /// zero), whitened, over the prior's identity.
+    fn reduced_jacobian(
+        &self,
+        disp: &DisplacementSolve<T>,
+        sens: &Sensitivity<T>,
+    ) -> Option<ReducedJacobian<T>> {
+        let taut = |j: usize| disp.states.get(j) == Some(&TendonState::Taut);
+        let a = SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
+            if j < self.count && taut(j) {
+                if i < self.count {
+                    sens.d_length_d_tension
+                        .get((j, i))
+                        .copied()
+                        .unwrap_or_else(T::zero)
+                } else {
+                    T::zero()
+                }
+            } else if i == j {
+                T::one()
+            } else {
+                T::zero()
+            }
+        });
+        let rhs = SMatrix::<T, MAX_TENDONS, 3>::from_fn(|j, c| {
+            if j < self.count && taut(j) {
+                -sens
+                    .d_length_d_force
+                    .get((j, c))
+                    .copied()
+                    .unwrap_or_else(T::zero)
+            } else {
+                T::zero()
+            }
+        });
+        let d_tau = a.lu().solve(&rhs)?;
+        let mut jac = ReducedJacobian::zeros();
+        if let Some(m) = self.measured {
+            for j in 0..self.count {
+                let s = m.std_n.get(j).copied().unwrap_or_else(T::one);
+                for c in 0..3 {
+                    if let (Some(e), Some(d)) = (jac.get_mut((j, c)), d_tau.get((j, c))) {
+                        *e = *d / s;
+                    }
+                }
+            }
+        }
+        for c in 0..3 {
+            if let Some(e) = jac.get_mut((MAX_TENDONS + c, c)) {
+                *e = T::one() / self.settings.force_prior_std_n;
+            }
+        }
+        crate::scalar::all_finite(&jac).then_some(jac)
+    }
+
+    /// Fits the tip force from `force0` (the tensions follow from the displacements at each
+    /// force: variable projection, which keeps the stiff directions the displacements fix out of
+    /// the search), by Levenberg-Marquardt on the reduced residuals.
+    fn fit(
+        &mut self,
+        force0: Vector3<T>,
+        near: Option<&TendonEquilibrium<T>>,
+    ) -> Result<Result<Outcome<T>, Termination>, ModelError> {
+        let mut force = force0;
+        let mut disp = self.tensions_at(&force, None, near)?;
+        if !disp.is_success() {
+            let forward = disp.solved.equilibrium.report.termination;
+            return Ok(Err(if forward.is_success() {
+                disp.termination
+            } else {
+                forward
+            }));
+        }
         let mut mu = T::lit(1e-3);
         let mut iterations = 0u16;
+        let mut termination = Termination::IterationLimit;
+        let mut last = None;
         for _ in 0..self.settings.max_iterations {
-            let (jac, d_tip) = match self.jacobian(&fit)? {
-                Ok(j) => j,
-                Err(t) => {
-                    return Ok(Outcome {
-                        fit,
-                        termination: t,
-                        iterations,
-                        linear: None,
-                    });
-                }
+            let sens = match self.sensitivity(&disp.solved, &force)? {
+                Ok(s) => s,
+                Err(t) => return Ok(Err(t)),
             };
-            let g = jac.tr_mul(&fit.rows);
+            let rows = self.reduced_rows(&disp, &force);
+            let Some(jac) = self.reduced_jacobian(&disp, &sens) else {
+                return Ok(Err(Termination::Singular));
+            };
+            last = Some(sens);
+            let g = jac.tr_mul(&rows);
             let h = jac.tr_mul(&jac);
-            let cost = Problem::<T, A, NODES>::cost(&fit);
+            let cost = rows.norm_squared();
             let mut accepted = None;
+            let mut converged = false;
             for _ in 0..12 {
-                let damped = SMatrix::<T, MAX_UNKNOWNS, MAX_UNKNOWNS>::from_fn(|r, c| {
-                    if r >= n || c >= n {
-                        return if r == c { T::one() } else { T::zero() };
-                    }
-                    let v = h.get((r, c)).copied().unwrap_or_else(T::zero);
-                    if r == c {
-                        v + mu * v.max(T::default_epsilon())
-                    } else {
-                        v
-                    }
-                });
+                let damped = h + SMatrix::<T, 3, 3>::from_diagonal(&h.diagonal()) * mu;
                 let Some(step) = damped.cholesky().map(|c| c.solve(&(-g))) else {
                     mu *= T::lit(10.0);
                     continue;
                 };
-                let mut theta = fit.theta + step;
-                for t in theta.iter_mut().take(self.count) {
-                    *t = t.max(T::zero());
-                }
-                let moved = theta - fit.theta;
                 // The step's size in standard deviations of the fit.
-                let predicted = (jac * moved).norm();
-                if predicted <= Self::step_tolerance_sigma() {
-                    return Ok(Outcome {
-                        fit,
-                        termination: Termination::Converged,
-                        iterations,
-                        linear: Some((jac, d_tip)),
-                    });
+                if (jac * step).norm() <= Self::step_tolerance_sigma() {
+                    converged = true;
+                    break;
                 }
-                match self.evaluate(&theta, Some(&fit.solved))? {
-                    Some(trial) if Problem::<T, A, NODES>::cost(&trial) < cost => {
-                        accepted = Some(trial);
-                        mu = (mu / T::lit(3.0)).max(T::lit(1e-9));
-                        break;
-                    }
-                    _ => mu *= T::lit(10.0),
+                let trial_force = force + step;
+                let trial = self.tensions_at(&trial_force, Some(&disp), None)?;
+                if trial.is_success()
+                    && self.reduced_rows(&trial, &trial_force).norm_squared() < cost
+                {
+                    accepted = Some((trial_force, trial));
+                    mu = (mu / T::lit(3.0)).max(T::lit(1e-9));
+                    break;
                 }
+                mu *= T::lit(10.0);
+            }
+            if converged {
+                termination = Termination::Converged;
+                break;
             }
             iterations += 1;
             match accepted {
-                Some(next) => fit = next,
+                Some((f, d)) => {
+                    force = f;
+                    disp = d;
+                }
                 None => {
-                    return Ok(Outcome {
-                        fit,
-                        termination: Termination::Stalled,
-                        iterations,
-                        linear: Some((jac, d_tip)),
-                    });
+                    termination = Termination::Stalled;
+                    break;
                 }
             }
         }
-        Ok(Outcome {
+        // The full linearisation at the answer, for its quality.
+        let mut theta = Theta::zeros();
+        for (t, v) in theta.iter_mut().zip(&disp.solved.tensions_n) {
+            *t = *v;
+        }
+        for (i, f) in force.iter().enumerate() {
+            if let Some(t) = theta.get_mut(self.count + i) {
+                *t = *f;
+            }
+        }
+        let Some(fit) = self.evaluate(&theta, Some(&disp.solved))? else {
+            return Ok(Err(Termination::NonFinite));
+        };
+        let linear = match (termination, last) {
+            (Termination::Converged | Termination::Stalled, Some(sens)) => {
+                Some(self.jacobian(&fit, &sens))
+            }
+            _ => None,
+        };
+        Ok(Ok(Outcome {
             fit,
-            termination: Termination::IterationLimit,
+            termination,
             iterations,
-            linear: None,
-        })
+            linear,
+        }))
     }
 
     /// `jac` with a unit row for each unused unknown (so that its SVD sees only the used ones), and
@@ -646,14 +794,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 }
             },
         }
-        let first = match problem.evaluate(&theta, near)? {
-            Some(f) => f,
-            None => match problem.evaluate(&theta, None)? {
-                Some(f) => f,
-                None => return Ok(problem.failed(&theta, Termination::ContinuationFailed)),
-            },
+        let force0 = problem.load(&theta).force_n;
+        let outcome = match problem.fit(force0, near)? {
+            Ok(o) => o,
+            Err(t) => return Ok(problem.failed(&theta, t)),
         };
-        let outcome = problem.fit(first)?;
         let mut best = problem.finish(outcome);
         if !best.is_success() {
             return Ok(best);
@@ -775,10 +920,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 if let Some(f) = theta.get_mut(self.count + axis) {
                     *f += sign * scale;
                 }
-                let Some(start) = self.evaluate(&theta, None)? else {
+                let force0 = self.load(&theta).force_n;
+                let Ok(outcome) = self.fit(force0, None)? else {
                     continue;
                 };
-                let outcome = self.fit(start)?;
                 let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
                 if cost > best_cost + nine {
                     continue;

@@ -3,9 +3,10 @@
 //! from the equilibrium it perturbs). Both the displacement-controlled solve and the inverse need
 //! them.
 //!
-//! The step is a fixed fraction of the tension that bends the rod by about a radian (`E I / (L r)`)
-//! and of the force that does (`E I / L^2`): large enough to stand above the solves' rounding floor
-//! in f32, small enough that the curvature of the map costs a fraction of that in f64.
+//! The step is a fixed fraction (`max(2 eps^(1/3), 1e-3)`) of the tension that bends the rod by about a radian
+//! (`E I / (L r)`) and of the force that does (`E I / L^2`): large enough to stand above the
+//! solves' own error (their tolerance) in f32 and along weakly seen directions, small enough that
+//! the curvature of the map costs a fraction of that in f64.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -48,9 +49,13 @@ pub(crate) fn tension_scale_n<T: Scalar, A: Attitude<T>, const NODES: usize>(
     model.moment_scale_nm() / radius
 }
 
-/// The relative forward-difference step of the scalar type: `eps^(1/2)` times a few.
+/// The relative forward-difference step, `max(2 eps^(1/3), 1e-3)`: the solves' own error (their
+/// tolerance, about `1e-11 L` in f64) over the step must stay small where the lengths see a direction
+/// weakly (an axial tip force changes them a thousand times less than a lateral one); the truncation
+/// error, about the step relative, only slows the Newton-type iterations that use it, by that factor
+/// per iteration.
 fn relative_step<T: Scalar>() -> T {
-    T::default_epsilon().sqrt() * T::lit(16.0)
+    (T::default_epsilon().powf(T::lit(1.0 / 3.0)) * T::lit(2.0)).max(T::lit(1e-3))
 }
 
 /// The sensitivity of `at` (a converged equilibrium of `tendons` on `model`, under `load`) to the
