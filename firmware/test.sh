@@ -114,15 +114,22 @@ elf_sizes() {
     echo "$flash $ram"
 }
 
-# defmt_flash_bytes ELF: bytes of `.defmt*` sections placed in flash.
-defmt_flash_bytes() {
-    local total=0 size
-    while read -r size; do
-        total=$((total + 0x$size))
-    done < <(readelf -SW "$1" | awk '{
-        for (i = 1; i <= NF; i++) if ($i ~ /^\.defmt/ && $(i + 2) ~ /^080/) print $(i + 4)
-    }')
-    echo "$total"
+# flash_without_defmt ELF: the flash span of the loaded segments but the one of defmt's markers
+# (`.defmt*`), which an image without defmt's linker script (no defmt logger) keeps in flash after
+# everything its own linker symbols delimit (2 B, and the alignment before them).
+flash_without_defmt() {
+    local end=0 markers type off vaddr paddr filesz memsz rest
+    markers=" $(readelf -SW "$1" | awk '{
+        for (i = 1; i <= NF; i++) if ($i ~ /^\.defmt/) printf "0x%s ", $(i + 2)
+    }')"
+    while read -r type off vaddr paddr filesz memsz rest; do
+        [[ "$type" == LOAD ]] || continue
+        [[ "$markers" == *" $(printf '0x%08x' "$paddr") "* ]] && continue
+        if ((paddr >= 0x08000000 && paddr < 0x08100000 && paddr + filesz - 0x08000000 > end)); then
+            end=$((paddr + filesz - 0x08000000))
+        fi
+    done < <(readelf -lW "$1")
+    echo "$end"
 }
 
 # image_budget IMAGE FLASH_BUDGET RAM_BUDGET: the image's flash and RAM (static + the stack's
@@ -139,13 +146,11 @@ image_budget() {
     # memory: flash F B, static RAM S B, stack high-water K B, RAM total T B
     read -r reported_flash reported_static stack < <(sed -E \
         's/^memory: flash ([0-9]+) B, static RAM ([0-9]+) B, stack high-water ([0-9]+) B.*/\1 \2 \3/' <<<"$line")
-    # An image without defmt's linker script (no defmt logger) keeps defmt's version and encoding
-    # markers (`.defmt.end`, 2 B) in flash after everything the linker symbols delimit.
-    local markers
-    markers="$(defmt_flash_bytes "$elf")"
-    if [[ "$((reported_flash + markers))" != "$flash" || "$reported_static" != "$static_ram" ]]; then
-        echo "readelf ($flash B flash, $static_ram B RAM) and the image's linker symbols" \
-            "($reported_flash + $markers B of defmt markers, $reported_static) disagree"
+    local own
+    own="$(flash_without_defmt "$elf")"
+    if [[ "$reported_flash" != "$own" || "$reported_static" != "$static_ram" ]]; then
+        echo "readelf ($own B flash without defmt's markers, $static_ram B RAM) and the image's" \
+            "linker symbols ($reported_flash, $reported_static) disagree"
         return 1
     fi
     local ram=$((static_ram + stack))
