@@ -1129,6 +1129,38 @@ mod tests {
     }
 
     #[test]
+    fn a_tendon_status_needs_the_displacement_solve_and_warns_of_unchecked_stability() {
+        let converged = report(Termination::Converged, Stability::Unchecked);
+        // Force control, converged: an answer, with the tendons' warning.
+        let s = Status::tendon(&converged, true, None);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::Answer, 0));
+        assert!(!s.stability_checked);
+        assert_eq!(s.warnings.len(), 1);
+        assert!(s.warnings[0].contains("tendons"), "{:?}", s.warnings);
+        // The scene turned the test off: its own warning, not two.
+        let s = Status::tendon(&converged, false, None);
+        assert_eq!(s.warnings.len(), 1);
+        assert!(s.warnings[0].contains("check_stability = false"));
+        // Displacement control: the search for the tensions must also converge.
+        let s = Status::tendon(&converged, true, Some(Termination::Converged));
+        assert_eq!(s.verdict, Verdict::Answer);
+        let s = Status::tendon(&converged, true, Some(Termination::Stalled));
+        assert_eq!((s.verdict, s.exit_code), (Verdict::NoAnswer, 3));
+        assert_eq!(s.termination, "Stalled");
+        assert!(
+            s.summary.starts_with("no answer") && s.warnings.is_empty(),
+            "{s:?}"
+        );
+        // A failed forward solve is no answer whatever the search says.
+        let failed = report(Termination::ContinuationFailed, Stability::Unchecked);
+        let s = Status::tendon(&failed, true, Some(Termination::Converged));
+        assert_eq!(
+            (s.verdict, s.termination.as_str()),
+            (Verdict::NoAnswer, "ContinuationFailed")
+        );
+    }
+
+    #[test]
     fn csv_status_cells_are_quoted_when_needed() {
         assert_eq!(csv_field("Converged/Stable"), "Converged/Stable");
         assert_eq!(csv_field("A { b: 1, c: 2 }"), "\"A { b: 1, c: 2 }\"");

@@ -363,9 +363,9 @@ impl Actuation {
             return Err(SceneError::new(
                 &self.key,
                 format!(
-                    "{} values for {} tendons (one per [[tendon]], in order)",
-                    self.values.len(),
-                    tendons.len()
+                    "{} for {} (one per [[tendon]], in order)",
+                    counted(self.values.len(), "value"),
+                    counted(tendons.len(), "tendon")
                 ),
             ));
         }
@@ -641,7 +641,11 @@ impl Scene {
         if len != n {
             return Err(SceneError::new(
                 key,
-                format!("{len} values for {n} tendons (one per [[tendon]], in order)"),
+                format!(
+                    "{} for {} (one per [[tendon]], in order)",
+                    counted(len, "value"),
+                    counted(n, "tendon")
+                ),
             ));
         }
         Ok(())
@@ -1206,6 +1210,15 @@ impl Guides {
     }
 }
 
+/// `n` and `what`, plural unless one: "1 value", "3 values".
+fn counted(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
+}
+
 /// One value per guide: the list `many` (`guides.<many_key>`, one per guide) or the single value
 /// `one` (`guides.<one_key>`) for all; each finite. A non-zero single value next to a list is refused.
 fn per_guide(
@@ -1223,7 +1236,11 @@ fn per_guide(
         )),
         Some(list) if list.len() != count => Err(SceneError::new(
             format!("guides.{many_key}"),
-            format!("{} values for {count} guides (one per guide)", list.len()),
+            format!(
+                "{} for {} (one per guide)",
+                counted(list.len(), "value"),
+                counted(count, "guide")
+            ),
         )),
         Some(list) => list
             .iter()

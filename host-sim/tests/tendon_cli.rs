@@ -476,7 +476,7 @@ fn tendon_bad_input_is_refused_naming_the_key() {
             "displacements_m = [0.0]",
             &[],
             "actuation.displacements_m",
-            "1 values for 3",
+            "1 value for 3 tendons",
         ),
         (
             "both",
@@ -639,7 +639,7 @@ fn tendon_bad_input_is_refused_naming_the_key() {
             "thicknesses_m = [0.0]",
             &[],
             "guides.thicknesses_m",
-            "1 values for 6 guides",
+            "1 value for 6 guides",
         ),
     ] {
         refused(name, from, to, args, key, reason);
