@@ -4,7 +4,7 @@
 use host_sim::scenes;
 use integration_tests::{tip, weight};
 use model_checks::reference::{self, Exp2Mass};
-use model_core::{Model, PointLoad, TipLoad};
+use model_core::{Model, PointLoad, ShootingSettings, Tendon, Tendons, TipLoad};
 use nalgebra::Vector3;
 
 fn same_physics(a: &Model<f64>, b: &Model<f64>, loads: &[TipLoad<f64>]) {
@@ -64,4 +64,78 @@ fn bench_3d_scene_is_the_golden_bench() {
     for (a, b) in a.iter().zip(&b) {
         assert!((a - b).norm() < 1e-17, "{a:?} vs {b:?}");
     }
+}
+
+/// A tendon scene against its reference builder: the same plan and dead load, the same tendons,
+/// and the same tendon equilibria (tip and path lengths) under `cases` (tensions, tip force).
+fn same_tendon_robot(
+    scene: &host_sim::scene::Scene,
+    rod: model_core::Rod<f64>,
+    tendons: &[Tendon<f64>],
+    cases: &[(Vec<f64>, [f64; 3])],
+) {
+    let from_scene = Model::new(scene.rod().unwrap()).unwrap();
+    let reference = Model::new(rod).unwrap();
+    same_physics(&from_scene, &reference, &[]);
+    let a = scene.tendon_set(&from_scene).unwrap().expect("tendons");
+    let b = Tendons::new(&reference, tendons).unwrap();
+    assert_eq!(a.len(), b.len());
+    for (j, (x, y)) in a.tendons().iter().zip(b.tendons()).enumerate() {
+        assert!(
+            (x.hole_m - y.hole_m).norm() < 1e-17,
+            "tendon {j}: {x:?} vs {y:?}"
+        );
+        assert!(
+            (x.end_m - y.end_m).abs() < 1e-15,
+            "tendon {j}: {x:?} vs {y:?}"
+        );
+        assert_eq!(x.axial_stiffness_n, y.axial_stiffness_n);
+        assert_eq!(x.feed_length_m, y.feed_length_m);
+        assert_eq!(a.rest_length_m(j), b.rest_length_m(j));
+    }
+    let settings = ShootingSettings::default();
+    for (tau, force) in cases {
+        let load = TipLoad::force(Vector3::from(*force));
+        let ea = from_scene
+            .solve_tendons(&a, tau, &load, None, &settings)
+            .unwrap();
+        let eb = reference
+            .solve_tendons(&b, tau, &load, None, &settings)
+            .unwrap();
+        assert!(ea.is_success() && eb.is_success(), "{tau:?}");
+        let gap = (ea.equilibrium.tip_position_m - eb.equilibrium.tip_position_m).norm();
+        assert!(gap < 1e-12, "{tau:?}: tips {gap:e} m apart");
+        for (x, y) in ea.path_m.iter().zip(&eb.path_m) {
+            assert!((x - y).abs() < 1e-12, "{tau:?}: paths {x} vs {y}");
+        }
+    }
+}
+
+#[test]
+fn tendon_bench_scene_is_the_reference_tendon_bench() {
+    let scene = scenes::tendon_bench().unwrap();
+    let (rod, tendons) = reference::tendon_bench::<f64>(200).unwrap();
+    let cases: Vec<_> = reference::csv_rows::<18>(reference::TENDON_BENCH_CSV)
+        .map(Result::unwrap)
+        .filter(|v| v[0] + v[1] + v[2] > 0.0)
+        .take(3)
+        .map(|v| (v[0..3].to_vec(), [v[3], v[4], v[5]]))
+        .collect();
+    same_tendon_robot(&scene, rod, &tendons, &cases);
+    // The scene's own actuation is a golden row's.
+    let actuation = scene.actuation().unwrap().expect("an actuation");
+    assert_eq!(actuation.values, [3.0, 1.5, 0.0]);
+}
+
+#[test]
+fn tendon_two_section_scene_is_the_reference_tendon_robot() {
+    let scene = scenes::tendon_two_section().unwrap();
+    let (rod, tendons) = reference::tendon_two_section::<f64>(100, 9.81).unwrap();
+    let cases: Vec<_> = reference::csv_rows::<25>(reference::TENDON_TWO_SECTION_CSV)
+        .map(Result::unwrap)
+        .filter(|v| v[0] > 0.0)
+        .take(3)
+        .map(|v| (v[1..7].to_vec(), [v[7], v[8], v[9]]))
+        .collect();
+    same_tendon_robot(&scene, rod, &tendons, &cases);
 }

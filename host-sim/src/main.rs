@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use host_sim::run::{self, Estimate, Solve, Status, exit, with_model};
-use host_sim::scene::{Scene, SceneError};
+use host_sim::run::{self, Estimate, Solve, Status, TendonSolve, exit, with_model};
+use host_sim::scene::{Actuation, Control, Scene, SceneError};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
 
@@ -39,7 +39,13 @@ termination/stability[/determination] (for example Converged/Stable/Weak); witho
 only row has empty numbers and the status. Stability \"Unchecked\" (the scene sets
 check_stability = false) or \"NonConservative\" (a moment acts) means the stability test did not
 run: an unstable, wrong-branch equilibrium would be reported as converged; a warning goes to
-standard error.";
+standard error.
+
+Tendons (host-sim/SCENES.md): solve also prints each tendon's tension, path length, spool
+displacement, state and slack (JSON: a \"tendons\" object; CSV: five columns per tendon before
+\"status\"); without an answer only the given tensions or displacements. Stability is always
+\"Unchecked\" with tendons (no energy test yet), with the warning. Displacement control is an
+answer only if the search for the tensions converged (exit 3 otherwise).";
 
 #[derive(Parser)]
 #[command(
@@ -84,12 +90,27 @@ enum Command {
         #[arg(long)]
         fit_density: bool,
     },
-    /// Solve a scene: the shape and the cable lengths under its tip load.
+    /// Solve a scene: the shape and the cable lengths under its tip load; with tendons, also their
+    /// tensions, path lengths, spool displacements and states (host-sim/SCENES.md).
     /// Exits 3 when the solve gives no answer (see below).
     #[command(after_help = EXIT_STATUS)]
     Solve {
         /// The scene file (TOML).
         scene: PathBuf,
+        /// Override the scene's [actuation] with tendon tensions, N, one per [[tendon]] in order:
+        /// T1,T2,T3 (force control).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            conflicts_with = "displacements"
+        )]
+        tensions: Option<Vec<f64>>,
+        /// Override the scene's [actuation] with spool displacements, m, one per [[tendon]] in
+        /// order, positive when taken in from the straight unloaded rod's zero-tension setting:
+        /// D1,D2,D3 (displacement control: the tensions are solved for).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        displacements: Option<Vec<f64>>,
         /// Override the tip force, N: fx,fy,fz (global frame).
         #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
         tip_force: Option<Vector3<f64>>,
@@ -196,6 +217,9 @@ fn solve_text(s: &run::Solution) -> String {
         "tip force {:?} N, tip moment {:?} N m",
         s.tip_force_n, s.tip_moment_nm
     );
+    if let Some(tendons) = &s.tendons {
+        tendon_given_text(&mut t, tendons);
+    }
     let _ = writeln!(t, "solve: {:?}", s.report);
     match (
         &s.tip_position_m,
@@ -206,16 +230,76 @@ fn solve_text(s: &run::Solution) -> String {
         (Some(tip), Some(tangent), Some(cables), Some(shape)) => {
             let _ = writeln!(t, "tip position {tip:?} m, tangent {tangent:?}");
             let _ = writeln!(t, "cable lengths {cables:?} m");
+            if let Some(tendons) = &s.tendons {
+                tendon_table_text(&mut t, tendons);
+            }
             t.push_str(&run::shape_csv(Some(shape), &s.status));
         }
         _ => {
-            let _ = writeln!(
-                t,
-                "no answer: no tip position, cable lengths or shape (the failed iterate is not printed)"
-            );
+            let what = if s.tendons.is_some() {
+                "no tip position, cable lengths, tendon tensions, paths or shape"
+            } else {
+                "no tip position, cable lengths or shape"
+            };
+            let _ = writeln!(t, "no answer: {what} (the failed iterate is not printed)");
         }
     }
     t
+}
+
+/// The tendons' actuation as given, and for displacement control how the search for the tensions
+/// went.
+fn tendon_given_text(t: &mut String, tendons: &run::TendonOutput) {
+    match (
+        tendons.control,
+        &tendons.tensions_n,
+        &tendons.displacements_m,
+    ) {
+        ("tensions", Some(tau), _) => {
+            let _ = writeln!(t, "tendons: force control, tensions given {tau:?} N");
+        }
+        (_, _, Some(d)) => {
+            let _ = writeln!(
+                t,
+                "tendons: displacement control, spool displacements given {d:?} m"
+            );
+        }
+        _ => {}
+    }
+    if let Some(d) = &tendons.displacement_solve {
+        let _ = writeln!(
+            t,
+            "displacement solve: termination {}, {} iterations, {} sweeps",
+            d.termination, d.iterations, d.sweeps
+        );
+    }
+}
+
+/// One row per tendon: tension, path, spool displacement, state, slack.
+fn tendon_table_text(t: &mut String, tendons: &run::TendonOutput) {
+    let (Some(tau), Some(path), Some(d), Some(states), Some(slack)) = (
+        &tendons.tensions_n,
+        &tendons.path_m,
+        &tendons.displacements_m,
+        &tendons.states,
+        &tendons.slack_m,
+    ) else {
+        return;
+    };
+    let _ = writeln!(
+        t,
+        "tendon  tension_n  path_m  displacement_m  state  slack_m"
+    );
+    for (j, ((((tau, path), d), state), slack)) in tau
+        .iter()
+        .zip(path)
+        .zip(d)
+        .zip(states)
+        .zip(slack)
+        .enumerate()
+    {
+        let _ = writeln!(t, "{j}  {tau}  {path}  {d}  {state}  {slack}");
+    }
 }
 
 fn estimate_text(e: &run::EstimateOutput) -> String {
@@ -304,6 +388,8 @@ fn main() -> ExitCode {
         })(),
         Command::Solve {
             scene,
+            tensions,
+            displacements,
             tip_force,
             tip_moment,
             format,
@@ -317,18 +403,41 @@ fn main() -> ExitCode {
             if let Some(m) = tip_moment {
                 load.moment_nm = m;
             }
-            let solution = with_model(
-                &scene,
-                Solve {
-                    scene: &scene,
-                    load,
-                },
-            )?;
+            let given = match (tensions, displacements) {
+                (Some(values), _) => Some(Actuation {
+                    control: Control::Tensions,
+                    values,
+                    key: "--tensions".into(),
+                }),
+                (None, Some(values)) => Some(Actuation {
+                    control: Control::Displacements,
+                    values,
+                    key: "--displacements".into(),
+                }),
+                (None, None) => None,
+            };
+            let solution = match scene.actuation_or(given)? {
+                Some(actuation) => with_model(
+                    &scene,
+                    TendonSolve {
+                        scene: &scene,
+                        load,
+                        actuation,
+                    },
+                )?,
+                None => with_model(
+                    &scene,
+                    Solve {
+                        scene: &scene,
+                        load,
+                    },
+                )?,
+            };
             status_stderr(&solution.status);
             let text = match format {
                 Format::Text => solve_text(&solution),
                 Format::Json => json(&solution)?,
-                Format::Csv => run::shape_csv(solution.shape.as_deref(), &solution.status),
+                Format::Csv => run::solution_csv(&solution),
             };
             emit(&text, out.as_ref())?;
             Ok(solution.status.exit_code)
@@ -340,6 +449,13 @@ fn main() -> ExitCode {
             out,
         } => (|| {
             let scene = Scene::load(&scene)?;
+            if !scene.tendons.is_empty() {
+                return Err(SceneError::new(
+                    "tendon",
+                    "estimate does not model tendons yet: the inverse would ignore their pull \
+                     (solve a tendon scene with `host-sim solve`)",
+                ));
+            }
             let estimate = with_model(
                 &scene,
                 Estimate {

@@ -1,5 +1,5 @@
-//! `solve` and `estimate` on a scene: the forward shape and cable lengths, and the inverse from
-//! measured cable lengths. Results are plain data (serialisable to JSON and CSV), each with a
+//! `solve` and `estimate` on a scene: the forward shape and cable lengths (for a scene with tendons,
+//! from their tensions or spool displacements), and the inverse from measured cable lengths. Results are plain data (serialisable to JSON and CSV), each with a
 //! [`Status`] that says whether it is an answer, and the exit code that goes with it.
 //!
 //! A failed solve's iterate is not an answer: its shape, tip, cable lengths and forces are left out
@@ -15,13 +15,13 @@ use model_core::inverse::{
     Determination, EstimatorSettings, InverseSettings, InverseStart, LoadBasis, estimate,
 };
 use model_core::{
-    Attitude, LieGroup, Model, Quaternion, RotationMatrix, ShapePoint, SolveReport, Stability,
-    Start, Termination, TipLoad,
+    Attitude, DisplacementSettings, LieGroup, Model, Quaternion, RotationMatrix, ShapePoint,
+    SolveReport, Stability, Start, TendonEquilibrium, TendonState, Tendons, Termination, TipLoad,
 };
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use crate::scene::{AttitudeChoice, Scene, SceneError};
+use crate::scene::{Actuation, AttitudeChoice, Control, Scene, SceneError};
 
 /// Work that needs a model of some frame representation.
 pub trait WithModel {
@@ -190,6 +190,40 @@ impl Status {
             summary,
             warnings,
         }
+    }
+
+    /// The status of a tendon solve: that of its last forward solve (`report`), and for displacement
+    /// control the outcome of the search for the tensions (`displacement`: its termination), which
+    /// must also have converged. Model-core has no energy test of stability with tendons yet
+    /// (stability `Unchecked`): an answer says so in a warning.
+    pub fn tendon(
+        report: &SolveReport<f64>,
+        check_stability: bool,
+        displacement: Option<Termination>,
+    ) -> Self {
+        let mut status = Self::new(report, check_stability, None);
+        if let Some(t) = displacement.filter(|t| !t.is_success())
+            && status.verdict == Verdict::Answer
+        {
+            status.verdict = Verdict::NoAnswer;
+            status.exit_code = Verdict::NoAnswer.exit_code();
+            status.termination = format!("{t:?}");
+            status.summary = format!(
+                "no answer: no tensions found that explain the spool displacements (the \
+                 displacement solve ended {t:?}); the failed iterate's shape and numbers are not \
+                 printed"
+            );
+        }
+        if status.verdict == Verdict::Answer
+            && check_stability
+            && matches!(report.stability, Stability::Unchecked)
+        {
+            status.warnings.push(format!(
+                "stability not checked (tendons: model-core has no energy test of stability with \
+                 tendons yet): {UNCHECKED_STABILITY}"
+            ));
+        }
+        status
     }
 
     /// The text format's first line.
@@ -377,6 +411,51 @@ pub struct Solution {
     pub cable_lengths_m: Option<Vec<f64>>,
     /// Backbone at the output points.
     pub shape: Option<Vec<Point>>,
+    /// The tendons (absent, also from JSON, for a scene without tendons).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tendons: Option<TendonOutput>,
+}
+
+/// What a tendon solve gives for its tendons. The actuation given (tensions or displacements) is
+/// printed also without an answer, as the tip force is; everything solved for is `None` (JSON
+/// `null`) then.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct TendonOutput {
+    /// `"tensions"` (force control: tensions given) or `"displacements"` (displacement control:
+    /// spool displacements given, tensions solved for).
+    pub control: &'static str,
+    /// Displacement control only: how the search for the tensions went.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub displacement_solve: Option<DisplacementReport>,
+    /// Each tendon's tension, N.
+    #[serde(serialize_with = "real::opt_many")]
+    pub tensions_n: Option<Vec<f64>>,
+    /// Each tendon's path length, m: chords from the base plate's hole through every guide's hole to
+    /// its termination.
+    #[serde(serialize_with = "real::opt_many")]
+    pub path_m: Option<Vec<f64>>,
+    /// Each spool's displacement, m, positive when taken in from the setting on the straight,
+    /// unloaded rod at zero tension. Under force control: the displacement that holds the tendon
+    /// at its tension (a tendon at zero tension just taut).
+    #[serde(serialize_with = "real::opt_many")]
+    pub displacements_m: Option<Vec<f64>>,
+    /// Each tendon's state: `"taut"` (tension above zero) or `"slack"` (zero tension).
+    pub states: Option<Vec<&'static str>>,
+    /// Each tendon's slack, m: how much longer it is than its path (zero when taut; under force
+    /// control always zero).
+    #[serde(serialize_with = "real::opt_many")]
+    pub slack_m: Option<Vec<f64>>,
+}
+
+/// How a displacement-controlled solve went.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct DisplacementReport {
+    /// Why the semi-smooth Newton on the tensions stopped ("Converged" is an answer).
+    pub termination: String,
+    /// Its iterations.
+    pub iterations: u16,
+    /// Sweeps spent, forward solves and sensitivities together.
+    pub sweeps: u32,
 }
 
 fn arr(v: &Vector3<f64>) -> [f64; 3] {
@@ -431,9 +510,203 @@ impl WithModel for Solve<'_> {
             tip_tangent: answer.then(|| arr(&eq.tip_tangent())),
             cable_lengths_m: answer.then(|| eq.cable_lengths_m.iter().copied().collect()),
             shape,
+            tendons: None,
             status,
         })
     }
+}
+
+/// `solve` on a scene with tendons: the equilibrium under the tendons' tensions (force control) or
+/// their spool displacements (displacement control), the scene's dead loads and the tip load.
+#[derive(Debug)]
+pub struct TendonSolve<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The tip load.
+    pub load: TipLoad<f64>,
+    /// The actuation: the scene's ([`Scene::actuation`]) or the command line's.
+    pub actuation: Actuation,
+}
+
+impl WithModel for TendonSolve<'_> {
+    type Output = Solution;
+    fn run<A: Attitude<f64>>(self, model: &Model<f64, A>) -> Result<Solution, SceneError> {
+        let settings = self.scene.shooting_settings()?;
+        let tendons = self
+            .scene
+            .tendon_set(model)?
+            .ok_or_else(|| SceneError::new("tendon", "the scene has no [[tendon]]"))?;
+        let actuation = &self.actuation;
+        actuation.check(&tendons)?;
+        let refused = |e: model_core::ModelError| SceneError::new(&actuation.key, e.to_string());
+        let (solved, displacement) = match actuation.control {
+            Control::Tensions => {
+                let solved = model
+                    .solve_tendons(&tendons, &actuation.values, &self.load, None, &settings)
+                    .map_err(refused)?;
+                (solved, None)
+            }
+            Control::Displacements => {
+                let d = model
+                    .solve_displacements(
+                        &tendons,
+                        &actuation.values,
+                        &self.load,
+                        None,
+                        &settings,
+                        &DisplacementSettings::default(),
+                    )
+                    .map_err(refused)?;
+                (d.solved.clone(), Some(d))
+            }
+        };
+        let eq = &solved.equilibrium;
+        let status = Status::tendon(
+            &eq.report,
+            settings.check_stability,
+            displacement.as_ref().map(|d| d.termination),
+        );
+        let answer = status.verdict.has_numbers();
+        let (shape, cable_lengths_m) = if answer {
+            let s = self.scene.output_points_m(model.length_m())?;
+            let points = tendon_shape(model, &tendons, &solved, &s)?;
+            (
+                Some(points.iter().map(point).collect()),
+                Some(cable_lengths(model, &tendons, &solved)?),
+            )
+        } else {
+            (None, None)
+        };
+        let given = Some(actuation.values.clone());
+        let mut out = TendonOutput {
+            control: match actuation.control {
+                Control::Tensions => "tensions",
+                Control::Displacements => "displacements",
+            },
+            displacement_solve: displacement.as_ref().map(|d| DisplacementReport {
+                termination: format!("{:?}", d.termination),
+                iterations: d.iterations,
+                sweeps: d.sweeps,
+            }),
+            tensions_n: None,
+            path_m: None,
+            displacements_m: None,
+            states: None,
+            slack_m: None,
+        };
+        match (&displacement, answer) {
+            (None, false) => out.tensions_n = given,
+            (Some(_), false) => out.displacements_m = given,
+            (None, true) => {
+                out.tensions_n = given;
+                out.displacements_m = Some(spool_displacements(&tendons, &solved));
+                out.states = Some(
+                    solved
+                        .tensions_n
+                        .iter()
+                        .map(|t| {
+                            state_name(if *t > 0.0 {
+                                TendonState::Taut
+                            } else {
+                                TendonState::Slack
+                            })
+                        })
+                        .collect(),
+                );
+                out.slack_m = Some(vec![0.0; tendons.len()]);
+            }
+            (Some(d), true) => {
+                out.tensions_n = Some(solved.tensions_n.iter().copied().collect());
+                out.displacements_m = given;
+                out.states = Some(d.states.iter().copied().map(state_name).collect());
+                out.slack_m = Some(d.slack_m.iter().copied().collect());
+            }
+        }
+        if answer {
+            out.path_m = Some(solved.path_m.iter().copied().collect());
+        }
+        Ok(Solution {
+            scene: self.scene.name.clone(),
+            tip_force_n: arr(&self.load.force_n),
+            tip_moment_nm: arr(&self.load.moment_nm),
+            report: Report::from(&eq.report),
+            tip_position_m: answer.then(|| arr(&eq.tip_position_m)),
+            tip_tangent: answer.then(|| arr(&eq.tip_tangent())),
+            cable_lengths_m,
+            shape,
+            tendons: Some(out),
+            status,
+        })
+    }
+}
+
+fn state_name(state: TendonState) -> &'static str {
+    match state {
+        TendonState::Taut => "taut",
+        TendonState::Slack => "slack",
+    }
+}
+
+/// The backbone of a tendon equilibrium at the arc lengths `s_m`.
+fn tendon_shape<A: Attitude<f64>>(
+    model: &Model<f64, A>,
+    tendons: &Tendons<f64>,
+    solved: &TendonEquilibrium<f64>,
+    s_m: &[f64],
+) -> Result<Vec<ShapePoint<f64>>, SceneError> {
+    let mut points = vec![ShapePoint::default(); s_m.len()];
+    let written = model
+        .shape_tendons(tendons, solved, s_m, &mut points)
+        .map_err(|e| SceneError::new("output", e.to_string()))?;
+    points.truncate(written);
+    Ok(points)
+}
+
+/// The spool displacements that hold the tendons at their tensions:
+/// `rest + feed - (feed + path) / (1 + tau / E_t A_t)` (the inverse of model-core's slack with no
+/// slack; `rest` is the termination's arc length).
+fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
+    tendons
+        .tendons()
+        .iter()
+        .zip(solved.tensions_n.iter().zip(&solved.path_m))
+        .enumerate()
+        .map(|(j, (t, (tau, path)))| {
+            let rest = tendons.rest_length_m(j).unwrap_or(0.0);
+            let stretch = t.axial_stiffness_n.map_or(1.0, |k| 1.0 + tau / k);
+            rest + t.feed_length_m - (t.feed_length_m + path) / stretch
+        })
+        .collect()
+}
+
+/// The passive cables' lengths on a tendon equilibrium (model-core's tendon solve measures only the
+/// tendons): as model-core's cable sweep measures them, straight chords from the hole in the first
+/// guide through each guide's hole up to the termination, where the cable is fixed at the same
+/// offset.
+fn cable_lengths<A: Attitude<f64>>(
+    model: &Model<f64, A>,
+    tendons: &Tendons<f64>,
+    solved: &TendonEquilibrium<f64>,
+) -> Result<Vec<f64>, SceneError> {
+    let rod = model.rod();
+    rod.cables
+        .iter()
+        .map(|cable| {
+            let mut s: Vec<f64> = rod
+                .guides
+                .iter()
+                .map(|g| g.s_m)
+                .filter(|s| *s <= cable.end_m)
+                .collect();
+            s.push(cable.end_m);
+            let offset = cable.offset_local_m();
+            let holes: Vec<_> = tendon_shape(model, tendons, solved, &s)?
+                .iter()
+                .map(|p| p.position_m + p.rotation * offset)
+                .collect();
+            Ok(holes.windows(2).map(|w| (w[1] - w[0]).norm()).sum())
+        })
+        .collect()
 }
 
 /// The numbers of an estimate (present for an answer and for an inconsistent estimate's closest fit).
@@ -613,8 +886,81 @@ pub const CSV_HEADER: &str =
 /// number fields and the status, so the file itself says why it holds no shape, and a reader that
 /// parses the numbers gets empty fields (NaN, or an error), never a failed iterate's.
 pub fn shape_csv(shape: Option<&[Point]>, status: &Status) -> String {
+    csv_table(shape, &[], &[], status)
+}
+
+/// The columns a scene with `count` tendons adds to the CSV, before `status`: five per tendon `j`,
+/// `tendon{j}_tension_n`, `tendon{j}_path_m`, `tendon{j}_displacement_m`, `tendon{j}_state`
+/// (`taut` or `slack`) and `tendon{j}_slack_m`.
+pub fn tendon_csv_columns(count: usize) -> Vec<String> {
+    (0..count)
+        .flat_map(|j| {
+            ["tension_n", "path_m", "displacement_m", "state", "slack_m"]
+                .map(|c| format!("tendon{j}_{c}"))
+        })
+        .collect()
+}
+
+/// A solution as CSV: the shape ([`shape_csv`]); for a scene with tendons, every row also carries
+/// the tendons' columns ([`tendon_csv_columns`]), the same on every row. Without an answer the only
+/// row has empty numbers, the tendons' included, and the status.
+pub fn solution_csv(solution: &Solution) -> String {
+    let Some(t) = &solution.tendons else {
+        return shape_csv(solution.shape.as_deref(), &solution.status);
+    };
+    let count = t
+        .tensions_n
+        .as_ref()
+        .or(t.displacements_m.as_ref())
+        .map_or(0, Vec::len);
+    let cells: Vec<String> = match (
+        &t.tensions_n,
+        &t.path_m,
+        &t.displacements_m,
+        &t.states,
+        &t.slack_m,
+    ) {
+        (Some(tau), Some(path), Some(d), Some(states), Some(slack)) if solution.shape.is_some() => {
+            (0..count)
+                .flat_map(|j| {
+                    let number = |v: &[f64]| v.get(j).map_or(String::new(), f64::to_string);
+                    [
+                        number(tau),
+                        number(path),
+                        number(d),
+                        states.get(j).map_or(String::new(), |s| (*s).to_string()),
+                        number(slack),
+                    ]
+                })
+                .collect()
+        }
+        _ => Vec::new(),
+    };
+    csv_table(
+        solution.shape.as_deref(),
+        &tendon_csv_columns(count),
+        &cells,
+        &solution.status,
+    )
+}
+
+/// [`CSV_HEADER`] with `columns` before `status`; each shape row with `cells` (as many as
+/// `columns`) before its status; without a shape one row of empty fields and the status.
+fn csv_table(
+    shape: Option<&[Point]>,
+    columns: &[String],
+    cells: &[String],
+    status: &Status,
+) -> String {
     let cell = csv_field(&status.csv_cell());
-    let mut out = format!("{CSV_HEADER}\n");
+    let header = CSV_HEADER.strip_suffix(",status").unwrap_or(CSV_HEADER);
+    let mut out = String::from(header);
+    for c in columns {
+        out.push(',');
+        out.push_str(c);
+    }
+    out.push_str(",status\n");
+    let extra: String = cells.iter().map(|c| format!(",{}", csv_field(c))).collect();
     match shape {
         Some(shape) => {
             for p in shape {
@@ -623,13 +969,14 @@ pub fn shape_csv(shape: Option<&[Point]>, status: &Status) -> String {
                 let [ux, uy, uz] = p.strain_per_m;
                 let _ = writeln!(
                     out,
-                    "{},{x},{y},{z},{tx},{ty},{tz},{ux},{uy},{uz},{cell}",
+                    "{},{x},{y},{z},{tx},{ty},{tz},{ux},{uy},{uz}{extra},{cell}",
                     p.s_m
                 );
             }
         }
         None => {
-            let _ = writeln!(out, ",,,,,,,,,,{cell}");
+            let empty = ",".repeat(9 + columns.len());
+            let _ = writeln!(out, "{empty},{cell}");
         }
     }
     out
@@ -779,6 +1126,38 @@ mod tests {
             );
             assert_eq!(s.exit_code, verdict.exit_code());
         }
+    }
+
+    #[test]
+    fn a_tendon_status_needs_the_displacement_solve_and_warns_of_unchecked_stability() {
+        let converged = report(Termination::Converged, Stability::Unchecked);
+        // Force control, converged: an answer, with the tendons' warning.
+        let s = Status::tendon(&converged, true, None);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::Answer, 0));
+        assert!(!s.stability_checked);
+        assert_eq!(s.warnings.len(), 1);
+        assert!(s.warnings[0].contains("tendons"), "{:?}", s.warnings);
+        // The scene turned the test off: its own warning, not two.
+        let s = Status::tendon(&converged, false, None);
+        assert_eq!(s.warnings.len(), 1);
+        assert!(s.warnings[0].contains("check_stability = false"));
+        // Displacement control: the search for the tensions must also converge.
+        let s = Status::tendon(&converged, true, Some(Termination::Converged));
+        assert_eq!(s.verdict, Verdict::Answer);
+        let s = Status::tendon(&converged, true, Some(Termination::Stalled));
+        assert_eq!((s.verdict, s.exit_code), (Verdict::NoAnswer, 3));
+        assert_eq!(s.termination, "Stalled");
+        assert!(
+            s.summary.starts_with("no answer") && s.warnings.is_empty(),
+            "{s:?}"
+        );
+        // A failed forward solve is no answer whatever the search says.
+        let failed = report(Termination::ContinuationFailed, Stability::Unchecked);
+        let s = Status::tendon(&failed, true, Some(Termination::Converged));
+        assert_eq!(
+            (s.verdict, s.termination.as_str()),
+            (Verdict::NoAnswer, "ContinuationFailed")
+        );
     }
 
     #[test]

@@ -1,12 +1,14 @@
-//! Scene files (TOML): the rod and its sections, guides, cables, loads, gravity, output points, solver
-//! and estimator settings. Keys carry their units; unknown keys are refused, so a typo is an error
-//! and not a silently ignored setting.
+//! Scene files (TOML): the rod and its sections, guides, cables, tendons and their actuation, loads,
+//! gravity, output points, solver and estimator settings. Keys carry their units; unknown keys are
+//! refused, so a typo is an error and not a silently ignored setting. `host-sim/SCENES.md` documents
+//! the tendon keys.
 //!
-//! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`]; every error names the
-//! field and the reason.
+//! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`], its tendons a
+//! [`model_core::Tendons`] checked against the model through [`Scene::tendon_set`], their actuation
+//! an [`Actuation`] through [`Scene::actuation`]; every error names the field and the reason.
 //!
 //! Sizes are checked before anything is sized by them: a count read from the file (`guides.count`,
-//! `output.points`) is checked against its limit ([`model_core::MAX_GUIDES`],
+//! `output.points`, the `[[tendon]]` tables and the `[actuation]` lists) is checked against its limit ([`model_core::MAX_GUIDES`],
 //! [`MAX_OUTPUT_POINTS`]) before a vector is built from it, and the RK4 steps of all sections together
 //! against [`MAX_TOTAL_STEPS`], so a mistyped number is a [`SceneError`] naming the key and the limit,
 //! never a panic, an aborted allocation or a solve that runs for minutes. [`Scene::parse`] runs these
@@ -16,8 +18,9 @@ use std::fmt;
 use std::path::Path;
 
 use model_core::{
-    Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, Material, PointLoad, Rod,
-    Section, ShootingSettings, Stiffness, StrainModel, TipLoad,
+    Attitude, Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, MAX_TENDONS,
+    Material, Model, PointLoad, Rod, Section, ShootingSettings, Stiffness, StrainModel, Tendon,
+    Tendons, TipLoad,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
@@ -152,9 +155,15 @@ pub struct Scene {
     /// Cable guides.
     #[serde(default)]
     pub guides: Option<Guides>,
-    /// Cables through the guides.
+    /// Cables through the guides (passive: they measure).
     #[serde(default, rename = "cable")]
     pub cables: Vec<CableSpec>,
+    /// Tendons through the guides' holes (they pull; at most [`MAX_TENDONS`]).
+    #[serde(default, rename = "tendon")]
+    pub tendons: Vec<TendonSpec>,
+    /// How the tendons are actuated: tensions or spool displacements, one per tendon.
+    #[serde(default)]
+    pub actuation: Option<ActuationSpec>,
     /// Point loads on the backbone.
     #[serde(default, rename = "load")]
     pub loads: Vec<LoadSpec>,
@@ -268,12 +277,16 @@ pub struct Guides {
     pub count: Option<Count>,
     /// Explicit centres, m.
     pub centres_m: Option<Vec<f64>>,
-    /// Thickness along the backbone, m.
+    /// Thickness along the backbone, m (every guide).
     #[serde(default)]
     pub thickness_m: f64,
-    /// Mass of each guide, kg.
+    /// Mass of each guide, kg (every guide).
     #[serde(default)]
     pub mass_kg: f64,
+    /// Thickness of each guide, m, one per guide in order (instead of `thickness_m`).
+    pub thicknesses_m: Option<Vec<f64>>,
+    /// Mass of each guide, kg, one per guide in order (instead of `mass_kg`).
+    pub masses_kg: Option<Vec<f64>>,
 }
 
 fn default_mass_model() -> String {
@@ -290,6 +303,99 @@ pub struct CableSpec {
     pub radius_m: f64,
     /// Termination arc length, m (default: the tip).
     pub end_m: Option<f64>,
+}
+
+/// A tendon: it runs from its spool through a hole in the base plate and the same hole in every
+/// guide up to the guide where it ends, and pulls.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TendonSpec {
+    /// Hole angle about the tangent from local x, degrees.
+    pub angle_deg: f64,
+    /// Hole distance from the backbone, m.
+    pub radius_m: f64,
+    /// Arc length of the guide where it ends, m (default: the tip); must be a guide's centre.
+    pub end_m: Option<f64>,
+    /// Axial stiffness `E_t A_t` of the tendon, N (absent: inextensible).
+    pub axial_stiffness_n: Option<f64>,
+    /// Free length from the spool to the base plate's hole, m (it stretches too; default 0).
+    #[serde(default)]
+    pub feed_length_m: f64,
+}
+
+/// How the tendons are actuated: exactly one of the two lists, one entry per `[[tendon]]`, in order.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ActuationSpec {
+    /// Force control: each tendon's tension, N (not negative).
+    pub tensions_n: Option<Vec<f64>>,
+    /// Displacement control: each spool's displacement, m, positive when taken in, from the setting
+    /// on the straight unloaded rod at zero tension.
+    pub displacements_m: Option<Vec<f64>>,
+}
+
+/// Which quantity actuates the tendons.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Control {
+    /// Tensions given, N (force control).
+    Tensions,
+    /// Spool displacements given, m (displacement control): the tensions are solved for.
+    Displacements,
+}
+
+/// The tendons' actuation, one value per tendon, from the scene or the command line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Actuation {
+    /// Tensions or displacements.
+    pub control: Control,
+    /// One value per tendon: N for tensions, m for displacements.
+    pub values: Vec<f64>,
+    /// Where the values come from, to name it in errors (`actuation.tensions_n`, `--tensions`).
+    pub key: String,
+}
+
+impl Actuation {
+    /// Checks the values against `tendons`: one per tendon, each finite; a tension not negative; a
+    /// displacement shorter than the tendon's whole length (spool to termination). Errors name
+    /// `key[i]`.
+    pub fn check(&self, tendons: &Tendons<f64>) -> Result<(), SceneError> {
+        if self.values.len() != tendons.len() {
+            return Err(SceneError::new(
+                &self.key,
+                format!(
+                    "{} for {} (one per [[tendon]], in order)",
+                    counted(self.values.len(), "value"),
+                    counted(tendons.len(), "tendon")
+                ),
+            ));
+        }
+        for (i, (&x, t)) in self.values.iter().zip(tendons.tendons()).enumerate() {
+            let field = format!("{}[{i}]", self.key);
+            finite(&field, x)?;
+            match self.control {
+                Control::Tensions if x < 0.0 => {
+                    return Err(SceneError::new(
+                        field,
+                        format!("{x} N: a tension must not be negative (a tendon only pulls)"),
+                    ));
+                }
+                Control::Displacements => {
+                    let whole_m = tendons.rest_length_m(i).unwrap_or(0.0) + t.feed_length_m;
+                    if x >= whole_m {
+                        return Err(SceneError::new(
+                            field,
+                            format!(
+                                "{x} m taken in: at least the tendon's whole length, {whole_m} m \
+                                 from spool to termination"
+                            ),
+                        ));
+                    }
+                }
+                Control::Tensions => {}
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A point load.
@@ -491,7 +597,206 @@ impl Scene {
             guides.count()?;
         }
         self.output_point_count()?;
+        self.check_tendon_counts()?;
         Ok(())
+    }
+
+    /// The `[[tendon]]` tables (at most [`MAX_TENDONS`]) and the `[actuation]` table: exactly one of
+    /// its lists, one entry per tendon, and no actuation without tendons.
+    fn check_tendon_counts(&self) -> Result<(), SceneError> {
+        let n = self.tendons.len();
+        if n > MAX_TENDONS {
+            return Err(SceneError::new(
+                "tendon",
+                format!("{n} [[tendon]] tables; at most {MAX_TENDONS} (model-core's MAX_TENDONS)"),
+            ));
+        }
+        let Some(a) = &self.actuation else {
+            return Ok(());
+        };
+        let (key, len) = match (&a.tensions_n, &a.displacements_m) {
+            (Some(t), None) => ("actuation.tensions_n", t.len()),
+            (None, Some(d)) => ("actuation.displacements_m", d.len()),
+            (Some(_), Some(_)) => {
+                return Err(SceneError::new(
+                    "actuation",
+                    "give either tensions_n (force control) or displacements_m (displacement \
+                     control), not both",
+                ));
+            }
+            (None, None) => {
+                return Err(SceneError::new(
+                    "actuation",
+                    "give tensions_n (force control) or displacements_m (displacement control), \
+                     one entry per [[tendon]]",
+                ));
+            }
+        };
+        if n == 0 {
+            return Err(SceneError::new(
+                "actuation",
+                "the scene has no [[tendon]] to actuate",
+            ));
+        }
+        if len != n {
+            return Err(SceneError::new(
+                key,
+                format!(
+                    "{} for {} (one per [[tendon]], in order)",
+                    counted(len, "value"),
+                    counted(n, "tendon")
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The tendons' actuation as the scene gives it (`None` for a scene without tendons). A scene
+    /// with tendons needs an `[actuation]` table (the command line may give one instead: see
+    /// [`Scene::actuation_or`]).
+    pub fn actuation(&self) -> Result<Option<Actuation>, SceneError> {
+        self.actuation_or(None)
+    }
+
+    /// The tendons' actuation: `given` (from the command line) if any, else the scene's. The counts
+    /// are checked here; the values against the tendons by [`Actuation::check`].
+    pub fn actuation_or(&self, given: Option<Actuation>) -> Result<Option<Actuation>, SceneError> {
+        self.check_tendon_counts()?;
+        if self.tendons.is_empty() {
+            return match given {
+                Some(a) => Err(SceneError::new(
+                    a.key,
+                    "the scene has no [[tendon]] to actuate",
+                )),
+                None => Ok(None),
+            };
+        }
+        if let Some(a) = given {
+            return Ok(Some(a));
+        }
+        match &self.actuation {
+            Some(ActuationSpec {
+                tensions_n: Some(t),
+                ..
+            }) => Ok(Some(Actuation {
+                control: Control::Tensions,
+                values: t.clone(),
+                key: "actuation.tensions_n".into(),
+            })),
+            Some(ActuationSpec {
+                displacements_m: Some(d),
+                ..
+            }) => Ok(Some(Actuation {
+                control: Control::Displacements,
+                values: d.clone(),
+                key: "actuation.displacements_m".into(),
+            })),
+            _ => Err(SceneError::new(
+                "actuation",
+                "missing: a scene with [[tendon]] needs an [actuation] table with tensions_n or \
+                 displacements_m (or give --tensions or --displacements)",
+            )),
+        }
+    }
+
+    /// The tendons in SI units, each checked on its own (the fields that need no model):
+    /// `end_m` defaults to the tip.
+    pub fn tendon_specs(&self) -> Result<Vec<Tendon<f64>>, SceneError> {
+        self.check_tendon_counts()?;
+        let length_m: f64 = self.sections.iter().map(|s| s.length_m).sum();
+        self.tendons
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let field = |key: &str| format!("tendon[{i}].{key}");
+                let angle = finite(&field("angle_deg"), t.angle_deg)?;
+                let radius = finite(&field("radius_m"), t.radius_m)?;
+                if radius < 0.0 {
+                    return Err(SceneError::new(
+                        field("radius_m"),
+                        "must not be negative (the angle gives the side)",
+                    ));
+                }
+                let end = finite(&field("end_m"), t.end_m.unwrap_or(length_m))?;
+                let feed = finite(&field("feed_length_m"), t.feed_length_m)?;
+                if feed < 0.0 {
+                    return Err(SceneError::new(
+                        field("feed_length_m"),
+                        "must not be negative",
+                    ));
+                }
+                if let Some(k) = t.axial_stiffness_n
+                    && !(k.is_finite() && k > 0.0)
+                {
+                    return Err(SceneError::new(
+                        field("axial_stiffness_n"),
+                        "must be a positive number (leave it out for an inextensible tendon)",
+                    ));
+                }
+                Ok(Tendon {
+                    axial_stiffness_n: t.axial_stiffness_n,
+                    feed_length_m: feed,
+                    ..Tendon::at_angle(angle.to_radians(), radius, end)
+                })
+            })
+            .collect()
+    }
+
+    /// The tendons checked against `model`'s guides (`None` for a scene without tendons). Each must
+    /// end at a guide's centre (within a micrometre, as model-core requires); the guides must lie
+    /// distal of the base plate.
+    pub fn tendon_set<A: Attitude<f64>, const NODES: usize>(
+        &self,
+        model: &Model<f64, A, NODES>,
+    ) -> Result<Option<Tendons<f64>>, SceneError> {
+        let specs = self.tendon_specs()?;
+        if specs.is_empty() {
+            return Ok(None);
+        }
+        let guides = &model.rod().guides;
+        if guides.is_empty() {
+            return Err(SceneError::new(
+                "guides",
+                "tendons need guides: a [[tendon]] runs through the guides' holes and ends at one",
+            ));
+        }
+        for (i, (t, spec)) in specs.iter().zip(&self.tendons).enumerate() {
+            if !guides.iter().any(|g| (g.s_m - t.end_m).abs() <= 1e-6) {
+                let which = if spec.end_m.is_some() {
+                    format!("{} m", t.end_m)
+                } else {
+                    format!("{} m (the tip, the default)", t.end_m)
+                };
+                return Err(SceneError::new(
+                    format!("tendon[{i}].end_m"),
+                    format!(
+                        "{which} is not a guide's centre: a tendon ends at a guide (give a guide's \
+                         centre, or add a guide there)"
+                    ),
+                ));
+            }
+        }
+        Tendons::new(model, &specs)
+            .map_err(|e| {
+                use model_core::ModelError::*;
+                let what = match &e {
+                    NonFinite(w) | NotPositive(w) | OutOfRange(w) | Unordered(w) | Capacity(w)
+                    | Empty(w) | Mismatch(w) => *w,
+                };
+                // A refusal of one tendon names the first refused on its own; of the guides, the guides.
+                let field = if what.starts_with("tendons") {
+                    "tendon".to_string()
+                } else if what.starts_with("tendon") {
+                    specs
+                        .iter()
+                        .position(|t| Tendons::new(model, core::slice::from_ref(t)).is_err())
+                        .map_or_else(|| "tendon".to_string(), |i| format!("tendon[{i}]"))
+                } else {
+                    "guides".to_string()
+                };
+                SceneError::new(field, e.to_string())
+            })
+            .map(Some)
     }
 
     /// RK4 steps in one sweep, summed over the sections (the plan adds at most one a guide, load or
@@ -876,17 +1181,72 @@ impl Guides {
                 ));
             }
         };
+        let thicknesses = per_guide(
+            "thickness_m",
+            self.thickness_m,
+            "thicknesses_m",
+            self.thicknesses_m.as_deref(),
+            count,
+        )?;
+        let masses = per_guide(
+            "mass_kg",
+            self.mass_kg,
+            "masses_kg",
+            self.masses_kg.as_deref(),
+            count,
+        )?;
         centres
             .iter()
+            .zip(thicknesses.iter().zip(&masses))
             .enumerate()
-            .map(|(i, &s)| {
+            .map(|(i, (&s, (&thickness_m, &mass_kg)))| {
                 Ok(Guide {
                     s_m: finite(&format!("guides.centres[{i}]"), s)?,
-                    thickness_m: finite("guides.thickness_m", self.thickness_m)?,
-                    mass_kg: finite("guides.mass_kg", self.mass_kg)?,
+                    thickness_m,
+                    mass_kg,
                 })
             })
             .collect()
+    }
+}
+
+/// `n` and `what`, plural unless one: "1 value", "3 values".
+fn counted(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
+}
+
+/// One value per guide: the list `many` (`guides.<many_key>`, one per guide) or the single value
+/// `one` (`guides.<one_key>`) for all; each finite. A non-zero single value next to a list is refused.
+fn per_guide(
+    one_key: &str,
+    one: f64,
+    many_key: &str,
+    many: Option<&[f64]>,
+    count: usize,
+) -> Result<Vec<f64>, SceneError> {
+    match many {
+        None => Ok(vec![finite(&format!("guides.{one_key}"), one)?; count]),
+        Some(_) if one != 0.0 => Err(SceneError::new(
+            format!("guides.{one_key}"),
+            format!("give {one_key} (every guide) or {many_key} (one per guide), not both"),
+        )),
+        Some(list) if list.len() != count => Err(SceneError::new(
+            format!("guides.{many_key}"),
+            format!(
+                "{} for {} (one per guide)",
+                counted(list.len(), "value"),
+                counted(count, "guide")
+            ),
+        )),
+        Some(list) => list
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| finite(&format!("guides.{many_key}[{i}]"), x))
+            .collect(),
     }
 }
 

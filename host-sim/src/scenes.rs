@@ -30,3 +30,18 @@ pub fn exp2_accurate() -> Result<Scene, SceneError> {
 pub fn bench_3d() -> Result<Scene, SceneError> {
     Scene::parse(BENCH_3D, "scenes/bench_3d_cables.toml")
 }
+
+/// The thesis bench with three tendons (the golden `tendon_bench.csv`).
+pub const TENDON_BENCH: &str = include_str!("../scenes/tendon_bench.toml");
+/// The two-section, six-tendon robot (the golden `tendon_two_section.csv`).
+pub const TENDON_TWO_SECTION: &str = include_str!("../scenes/tendon_two_section.toml");
+
+/// The tendon bench.
+pub fn tendon_bench() -> Result<Scene, SceneError> {
+    Scene::parse(TENDON_BENCH, "scenes/tendon_bench.toml")
+}
+
+/// The two-section tendon robot.
+pub fn tendon_two_section() -> Result<Scene, SceneError> {
+    Scene::parse(TENDON_TWO_SECTION, "scenes/tendon_two_section.toml")
+}
