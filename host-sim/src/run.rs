@@ -662,19 +662,18 @@ fn tendon_shape<A: Attitude<f64>>(
     Ok(points)
 }
 
-/// The spool displacements that hold the tendons at their tensions:
-/// `rest + feed - (feed + path) / (1 + tau / E_t A_t)` (the inverse of model-core's slack with no
-/// slack; `rest` is the termination's arc length).
+/// The spool displacements that hold the tendons at their tensions: `rest + feed - N`, `N` the
+/// unstretched length the equilibrium needs (model-core's slack with no slack; `rest` is the
+/// termination's arc length).
 fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
     tendons
         .tendons()
         .iter()
-        .zip(solved.tensions_n.iter().zip(&solved.path_m))
+        .zip(&solved.unstretched_m)
         .enumerate()
-        .map(|(j, (t, (tau, path)))| {
+        .map(|(j, (t, needed))| {
             let rest = tendons.rest_length_m(j).unwrap_or(0.0);
-            let stretch = t.axial_stiffness_n.map_or(1.0, |k| 1.0 + tau / k);
-            rest + t.feed_length_m - (t.feed_length_m + path) / stretch
+            rest + t.feed_length_m - needed
         })
         .collect()
 }

@@ -19,8 +19,8 @@ use std::path::Path;
 
 use model_core::{
     Attitude, Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, MAX_TENDONS,
-    Material, Model, PointLoad, Rod, Section, ShootingSettings, Stiffness, StrainModel, Tendon,
-    Tendons, TipLoad,
+    Material, Model, PointLoad, Rod, Section, ShootingSettings, Sliding, Stiffness, StrainModel,
+    Tendon, Tendons, TipLoad,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
@@ -321,6 +321,9 @@ pub struct TendonSpec {
     /// Free length from the spool to the base plate's hole, m (it stretches too; default 0).
     #[serde(default)]
     pub feed_length_m: f64,
+    /// Coulomb friction coefficient at the holes (capstan law; default 0, frictionless).
+    #[serde(default)]
+    pub friction_coefficient: f64,
 }
 
 /// How the tendons are actuated: exactly one of the two lists, one entry per `[[tendon]]`, in order.
@@ -332,6 +335,9 @@ pub struct ActuationSpec {
     /// Displacement control: each spool's displacement, m, positive when taken in, from the setting
     /// on the straight unloaded rod at zero tension.
     pub displacements_m: Option<Vec<f64>>,
+    /// Which way the tendons slide through their holes, for the sign of their friction: "in" (the
+    /// spools take them in: loading; default) or "out" (paying out: unloading).
+    pub sliding: Option<String>,
 }
 
 /// Which quantity actuates the tendons.
@@ -725,6 +731,13 @@ impl Scene {
                         "must not be negative",
                     ));
                 }
+                let mu = finite(&field("friction_coefficient"), t.friction_coefficient)?;
+                if mu < 0.0 {
+                    return Err(SceneError::new(
+                        field("friction_coefficient"),
+                        "must not be negative (0: frictionless)",
+                    ));
+                }
                 if let Some(k) = t.axial_stiffness_n
                     && !(k.is_finite() && k > 0.0)
                 {
@@ -736,6 +749,7 @@ impl Scene {
                 Ok(Tendon {
                     axial_stiffness_n: t.axial_stiffness_n,
                     feed_length_m: feed,
+                    friction_coefficient: mu,
                     ..Tendon::at_angle(angle.to_radians(), radius, end)
                 })
             })
@@ -796,7 +810,22 @@ impl Scene {
                 };
                 SceneError::new(field, e.to_string())
             })
-            .map(Some)
+            .and_then(|mut set| {
+                let sliding = match self.actuation.as_ref().and_then(|a| a.sliding.as_deref()) {
+                    None | Some("in") => Sliding::In,
+                    Some("out") => Sliding::Out,
+                    Some(other) => {
+                        return Err(SceneError::new(
+                            "actuation.sliding",
+                            format!("\"{other}\" is not \"in\" (loading) or \"out\" (unloading)"),
+                        ));
+                    }
+                };
+                for j in 0..set.len() {
+                    set.set_sliding(j, sliding);
+                }
+                Ok(Some(set))
+            })
     }
 
     /// RK4 steps in one sweep, summed over the sections (the plan adds at most one a guide, load or

@@ -746,3 +746,54 @@ fn tendon_example_of_scenes_md_solves_as_documented() {
         "{help}"
     );
 }
+
+/// Capstan friction from the scene: with `friction_coefficient` the same spool displacements need
+/// different tensions loading (`sliding = "in"`) and unloading (`"out"`), each a round trip of its
+/// own force-controlled solve; `sliding` is checked.
+#[test]
+fn tendon_friction_and_sliding_from_the_scene() {
+    let text = scene_text("tendon_bench.toml").replace(
+        "radius_m = 0.01\n",
+        "radius_m = 0.01\nfriction_coefficient = 0.15\n",
+    );
+    assert_eq!(text.matches("friction_coefficient = 0.15").count(), 3);
+    let act = "tensions_n = [3.0, 1.5, 0.0]";
+    let tensions = [2.5, 0.5, 1.0];
+    let loading = text.replace(act, &format!("tensions_n = [{}]", list(&tensions)));
+    let forward = solved(&[&write_scene("friction-in", &loading)]);
+    let d = numbers(&forward["tendons"]["displacements_m"]);
+    let mut found = Vec::new();
+    for sliding in ["in", "out"] {
+        let copy = text.replace(
+            act,
+            &format!("displacements_m = [{}]\nsliding = \"{sliding}\"", list(&d)),
+        );
+        let back = solved(&[&write_scene(&format!("friction-{sliding}-d"), &copy)]);
+        assert_eq!(
+            back["tendons"]["displacement_solve"]["termination"],
+            "Converged"
+        );
+        found.push(numbers(&back["tendons"]["tensions_n"]));
+    }
+    for (a, b) in found[0].iter().zip(tensions) {
+        assert!((a - b).abs() < 1e-6, "loading: {a} N for {b} N");
+    }
+    // Unloading, friction holds part of the shape: the top tendon's spool pulls less.
+    assert!(found[1][0] < tensions[0] - 0.05, "{:?}", found[1]);
+    refused(
+        "sliding-bad",
+        act,
+        "tensions_n = [3.0, 1.5, 0.0]\nsliding = \"sideways\"",
+        &[],
+        "actuation.sliding",
+        "sideways",
+    );
+    refused(
+        "friction-negative",
+        "radius_m = 0.01\n",
+        "radius_m = 0.01\nfriction_coefficient = -0.1\n",
+        &[],
+        "tendon[0].friction_coefficient",
+        "negative",
+    );
+}
