@@ -13,6 +13,10 @@
 //! ([`REFERENCE_STEPS`] per section); its cost is its step count times the cost of one step of its
 //! kind, measured once (see [`step_cost`]). The pick is the cheapest candidate within the tolerance,
 //! and its measured error comes with it, so a caller can see the pick meets the tolerance.
+//!
+//! Tendons that pull have their own picker, [`choose_tendons`]: discrete guides, continuous routing
+//! or piecewise constant curvature, against the discrete guides on a fine grid
+//! (`crate::tendon` `choose.rs`).
 
 use heapless::Vec;
 
@@ -22,6 +26,11 @@ use crate::planar::PlanarModel;
 use crate::rod::{Rod, StrainModel};
 use crate::shooting::{Equilibrium, ShootingSettings, Start, TipLoad};
 use crate::{Model, Scalar};
+
+pub use crate::tendon::{
+    MAX_TENDON_TRIALS, PCC_COST, TendonChoice, TendonModel, TendonTrial, TendonVariant,
+    choose_tendons, tendon_step_cost,
+};
 
 /// Steps per section of the reference the candidates are measured against.
 pub const REFERENCE_STEPS: u16 = 512;

@@ -132,9 +132,9 @@ pub(crate) struct State<T: Scalar, A> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Rates<T: Scalar, A: Attitude<T>> {
     pub(super) p: Vector3<T>,
-    att: A::Rate,
-    n: Vector3<T>,
-    m: Vector3<T>,
+    pub(super) att: A::Rate,
+    pub(super) n: Vector3<T>,
+    pub(super) m: Vector3<T>,
 }
 
 /// A tangent `(dp, dtheta, dn, dm)`.
@@ -201,12 +201,12 @@ pub(crate) struct Stage<T> {
 /// One interval's compliance and weight per length.
 #[derive(Debug)]
 pub(crate) struct Field<'a, T> {
-    comp: &'a Compliance<T>,
+    pub(super) comp: &'a Compliance<T>,
     /// Distributed force, N/m, global.
-    f: Vector3<T>,
-    kirchhoff: bool,
+    pub(super) f: Vector3<T>,
+    pub(super) kirchhoff: bool,
     /// `(1 / EI)^2` about the softer bending axis, for [`super::bending_load`].
-    compliance_squared: T,
+    pub(super) compliance_squared: T,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<T, 6>

@@ -41,7 +41,7 @@ impl<T: Scalar> TendonEquilibrium<T> {
 
 impl<T: Scalar> Tendons<T> {
     /// Whether these tendons were checked against a model with `model`'s guides.
-    fn check_model<A: Attitude<T>, const NODES: usize>(
+    pub(super) fn check_model<A: Attitude<T>, const NODES: usize>(
         &self,
         model: &Model<T, A, NODES>,
     ) -> Result<(), ModelError> {

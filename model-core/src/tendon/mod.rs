@@ -17,15 +17,27 @@
 //! | how paths and tip move with tensions and tip force | `sensitivity.rs` |
 //! | the forward solve from spool displacements: compliance and slack | `actuation.rs` |
 //! | the inverse: tensions, tip force and shape from displacements (and tensions) | `inverse.rs` |
+//! | continuous routing (Rucker-Webster): the cross-section's law with tendons along it | `distributed.rs` |
+//! | continuous routing: the forward solve and its path lengths | `continuous.rs` |
+//! | piecewise constant curvature: arcs from the tendons' moments, closed form | `pcc.rs` |
+//! | the cheapest of the three within a tolerance of the discrete guides | `choose.rs` |
 
 mod actuation;
+mod choose;
+mod continuous;
+pub(crate) mod distributed;
 mod forward;
 pub(crate) mod guide_force;
 mod inverse;
 mod paths;
+mod pcc;
 mod sensitivity;
 
 pub use actuation::{DisplacementSettings, DisplacementSolve, TendonState};
+pub use choose::{
+    MAX_TENDON_TRIALS, PCC_COST, TendonChoice, TendonModel, TendonTrial, TendonVariant,
+    choose_tendons, tendon_step_cost,
+};
 pub use forward::TendonEquilibrium;
 pub use inverse::{MeasuredTensions, TendonEstimate, TendonInverseSettings, TendonQuality};
 

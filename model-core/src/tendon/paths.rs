@@ -66,3 +66,22 @@ pub(crate) fn lengths<T: Scalar>(
     }
     Some(out)
 }
+
+/// The unstretched lengths of tendons with one tension all along (no friction) and paths `path_m`:
+/// `(feed + path) / (1 + tau / E_t A_t)`, for the variants that do not resolve the chords.
+pub(crate) fn uniform_unstretched<T: Scalar>(
+    tendons: &Tendons<T>,
+    tensions_n: &[T],
+    path_m: &[T],
+) -> heapless::Vec<T, MAX_TENDONS> {
+    let mut out = heapless::Vec::new();
+    for ((t, tau), path) in tendons.tendons().iter().zip(tensions_n).zip(path_m) {
+        let spanned = t.feed_length_m + *path;
+        // Cannot overflow: at most MAX_TENDONS.
+        let _ = out.push(match t.axial_stiffness_n {
+            Some(k) => spanned / (T::one() + *tau / k),
+            None => spanned,
+        });
+    }
+    out
+}
