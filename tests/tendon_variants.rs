@@ -191,7 +191,16 @@ fn pcc<T: Scalar>(
     let tendons = Tendons::new(&model, tendons).unwrap();
     let tau: Vec<T> = tensions_n.iter().map(|t| T::lit(*t)).collect();
     let load = TipLoad::force(Vector3::from(tip_force_n.map(T::lit)));
-    let solved = model.solve_tendons_pcc(&tendons, &tau, &load).unwrap();
+    // With gravity or a tip load PCC is refused unless its error is taken knowingly.
+    let loaded = model.rod().gravity_m_s2 != Vector3::zeros() || tip_force_n != [0.0; 3];
+    assert_eq!(
+        model.solve_tendons_pcc(&tendons, &tau, &load).is_err(),
+        loaded,
+        "PCC must refuse exactly the loaded scenes"
+    );
+    let solved = model
+        .solve_tendons_pcc_ignoring_loads(&tendons, &tau, &load)
+        .unwrap();
     assert!(solved.is_success(), "{:?}", solved.equilibrium.report);
     solved
 }
@@ -484,10 +493,18 @@ fn tendon_variants_refuse_bad_input() {
                 .solve_tendons_continuous(&set, &bad, &zero, None, &settings())
                 .is_err()
         );
-        assert!(model.solve_tendons_pcc(&set, &bad, &zero).is_err());
+        assert!(
+            model
+                .solve_tendons_pcc_ignoring_loads(&set, &bad, &zero)
+                .is_err()
+        );
     }
     let nan_load = TipLoad::force(Vector3::new(f64::NAN, 0.0, 0.0));
-    assert!(model.solve_tendons_pcc(&set, &[1.0; 3], &nan_load).is_err());
+    assert!(
+        model
+            .solve_tendons_pcc_ignoring_loads(&set, &[1.0; 3], &nan_load)
+            .is_err()
+    );
     let (other, _) = reference::tendon_dense::<f64>(4, 20).unwrap();
     let other = Model::<f64>::new(other).unwrap();
     assert!(
@@ -495,5 +512,9 @@ fn tendon_variants_refuse_bad_input() {
             .solve_tendons_continuous(&set, &[1.0; 3], &zero, None, &settings())
             .is_err()
     );
-    assert!(other.solve_tendons_pcc(&set, &[1.0; 3], &zero).is_err());
+    assert!(
+        other
+            .solve_tendons_pcc_ignoring_loads(&set, &[1.0; 3], &zero)
+            .is_err()
+    );
 }

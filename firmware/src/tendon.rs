@@ -206,13 +206,22 @@ pub fn run_golden(
             index,
             tip_error_m,
             tension_error_n,
-            // The reference rows give tensions, not states: zero tension may read either way.
-            states_match: true,
+            // A tendon the reference pulls must be taut; at zero tension it is just taut and just
+            // slack, either state right.
+            states_match: out
+                .states
+                .iter()
+                .zip([t0, t1, t2])
+                .all(|(s, t)| t <= 0.0 || *s == TendonState::Taut),
             sweeps: out.sweeps,
             cost,
             passed: out.is_success()
                 && tip_error_m < TIP_TOLERANCE_M
                 && tension_error_n < TENSION_TOLERANCE_N,
+        };
+        let check = CaseCheck {
+            passed: check.passed && check.states_match,
+            ..check
         };
         report(&check);
         summary.add(&check, false);

@@ -271,7 +271,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             n += dn / length;
             m += dm;
             let size = step.norm();
-            let done = size <= T::lit(16.0) * eps * scale;
+            // Not at the first pass: its tangents were started from the straight-ahead guess of the
+            // next pose, which only a look-ahead replaces.
+            let done = iteration >= 1 && size <= T::lit(16.0) * eps * scale;
             let stalled = iteration >= 2 && size >= last_step * T::lit(0.5);
             if done || stalled {
                 if size > T::lit(1024.0) * eps * scale {

@@ -163,14 +163,15 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         shooting: &ShootingSettings<T>,
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
-        let sensitivity = previous
-            .has_sensitivity
-            .then_some(&previous.d_length_d_tension);
+        // A failed solve is no start: the update is then a cold one.
+        let usable = previous.is_success();
+        let sensitivity =
+            (usable && previous.has_sensitivity).then_some(&previous.d_length_d_tension);
         self.displacement_solve(
             tendons,
             displacements_m,
             load,
-            Some(&previous.solved),
+            usable.then_some(&previous.solved),
             sensitivity,
             shooting,
             settings,

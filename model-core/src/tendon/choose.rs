@@ -134,9 +134,10 @@ fn solve_variant<T: Scalar>(
             model.solve_tendons_continuous(&set, tensions_n, load, None, settings)?,
             cost,
         ),
-        TendonModel::ConstantCurvature => {
-            (model.solve_tendons_pcc(&set, tensions_n, load)?, PCC_COST)
-        }
+        TendonModel::ConstantCurvature => (
+            model.solve_tendons_pcc_ignoring_loads(&set, tensions_n, load)?,
+            PCC_COST,
+        ),
     })
 }
 
@@ -312,7 +313,7 @@ mod cost_probe {
     #[inline(never)]
     fn sweep_pcc(model: &Model<f64>, set: &Tendons<f64>, load: &TipLoad<f64>) -> bool {
         model
-            .solve_tendons_pcc(set, &TENSIONS, load)
+            .solve_tendons_pcc_ignoring_loads(set, &TENSIONS, load)
             .is_ok_and(|s| s.is_success())
     }
 

@@ -78,7 +78,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         load.validate()?;
         settings.validate()?;
         let ode = TendonRod::new(self, tendons, &tau, load, T::one());
-        let start = match start {
+        // A failed equilibrium is no start: its zeros would send a direct Newton off at full load.
+        let start = match start.filter(|s| s.is_success()) {
             Some(previous) => {
                 let eq = &previous.equilibrium;
                 finite_vec(&eq.base_force_n, "warm-start base force")?;
@@ -98,7 +99,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut path_m = Vec::new();
         let mut unstretched_m = Vec::new();
         if let (true, Some(x)) = (eq.report.termination.is_success(), x) {
-            match self.tendon_lengths(tendons, tensions_n, &ode, &x) {
+            match self
+                .tendon_lengths(tendons, tensions_n, &ode, &x)
+                .filter(|l| {
+                    l.path_m
+                        .iter()
+                        .chain(&l.unstretched_m)
+                        .all(|v| v.is_finite())
+                }) {
                 Some(lengths) => {
                     for (p, u) in lengths
                         .path_m

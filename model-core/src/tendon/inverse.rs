@@ -11,14 +11,19 @@
 //! - each measured tension, `(tau - tau_measured) / s_tau`;
 //! - the prior on the tip force, `F / s_F`.
 //!
-//! A projected Levenberg-Marquardt minimises their squares with `tau` kept non-negative; Jacobians
-//! come from `sensitivity.rs`. The posterior covariance is the inverse of the whitened information
-//! (from the SVD of the stacked system, not the normal matrix). What the data alone determine comes
-//! from the data rows alone: with displacements only there are `n` data for `n + 3` unknowns, so the
-//! tip force is not observable and the verdict says [`Determination::Undetermined`], whatever the
-//! prior makes of it; with tensions measured too it becomes observable (intrinsic force sensing).
-//! After a fit the search for other answers restarts from tip forces of a few buckling scales along
-//! each axis: another fit as good and far from the answer makes it [`Determination::Ambiguous`].
+//! The displacements are far more precise than anything else, so the fit is a variable projection:
+//! for each tip force the tensions are the ones the displacements give (`actuation.rs`), and
+//! Levenberg-Marquardt runs on the force alone against the measured tensions and the prior, with
+//! `d tau / d F` from the implicit function theorem on the taut tendons' `N(tau, F) = U0 - d`
+//! (Jacobians from `sensitivity.rs`). The posterior covariance is the inverse of the whitened
+//! information of the full linearisation (a bounded SVD of the stacked system, not the normal
+//! matrix). What the data alone determine comes from the data rows alone: with displacements only
+//! there are `n` data for `n + 3` unknowns, so the tip force is not observable and the verdict says
+//! [`Determination::Undetermined`], whatever the prior makes of it; with tensions measured too it
+//! becomes observable (intrinsic force sensing). Consistency needs data to spare: without, the
+//! verdict is at best [`Determination::Weak`]. After a fit the search for other answers restarts
+//! from tip forces of a few buckling scales along each axis: another fit as good and far from the
+//! answer makes it [`Determination::Ambiguous`] (MODEL.md §6.4).
 
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
@@ -35,6 +40,9 @@ use crate::loads::TipLoad;
 use crate::model::Model;
 use crate::report::Termination;
 use crate::shooting::ShootingSettings;
+
+/// Iterations a restart of the search for other answers gets.
+const RESTART_ITERATIONS: u16 = 12;
 
 /// Most unknowns: every tension and three force components.
 const MAX_UNKNOWNS: usize = MAX_TENDONS + 3;
@@ -116,8 +124,13 @@ pub struct TendonQuality<T> {
     pub force_std_n: Vector3<T>,
     /// Standard deviation of the tip position components, m.
     pub tip_std_m: Vector3<T>,
-    /// Rms of the whitened data residuals (displacements and tensions).
+    /// The whitened data residuals (displacements and tensions) as an rms per spare datum (the
+    /// data beyond the unknowns); not a number when there is none.
     pub residual_rms_sigma: T,
+    /// Whether any datum is to spare to test the model against the data (more active data than
+    /// unknowns). Without, the estimate is at best [`Determination::Weak`], and never
+    /// [`Determination::Inconsistent`] (nothing could show it).
+    pub consistency_tested: bool,
     /// Whether the data alone determine the tip force (rank of the data rows).
     pub force_observable: bool,
     /// The verdict on the whole estimate (tensions and tip force).
@@ -354,6 +367,8 @@ struct Outcome<T> {
     termination: Termination,
     iterations: u16,
     linear: Option<Linear<T>>,
+    /// Each tendon's state, as the displacement solve at the answer judged it.
+    states: Vec<TendonState, MAX_TENDONS>,
 }
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
@@ -512,18 +527,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             let h = jac.tr_mul(&jac);
             let cost = rows.norm_squared();
             let mut accepted = None;
-            let mut converged = false;
+            // Converged when the undamped Gauss-Newton step moves the fit by less than the
+            // tolerance (in standard deviations): a step made small by the damping is not.
+            let gauss_newton = h.cholesky().map(|c| (jac * c.solve(&(-g))).norm());
+            let converged = gauss_newton.is_some_and(|size| size <= Self::step_tolerance_sigma());
             for _ in 0..12 {
+                if converged {
+                    break;
+                }
                 let damped = h + SMatrix::<T, 3, 3>::from_diagonal(&h.diagonal()) * mu;
                 let Some(step) = damped.cholesky().map(|c| c.solve(&(-g))) else {
                     mu *= T::lit(10.0);
                     continue;
                 };
-                // The step's size in standard deviations of the fit.
-                if (jac * step).norm() <= Self::step_tolerance_sigma() {
-                    converged = true;
-                    break;
-                }
                 let trial_force = force + step;
                 let trial = self.tensions_at(&trial_force, Some(&disp), None)?;
                 if trial.is_success()
@@ -546,7 +562,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                     disp = d;
                 }
                 None => {
-                    termination = Termination::Stalled;
+                    // No step lowers the misfit: the rounding floor of the solves, where the
+                    // undamped step is a hundredth of a standard deviation or less (statistically
+                    // nothing), or a stall short of the answer.
+                    termination = if gauss_newton.is_some_and(|size| size <= T::lit(1e-2)) {
+                        Termination::Converged
+                    } else {
+                        Termination::Stalled
+                    };
                     break;
                 }
             }
@@ -575,6 +598,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             termination,
             iterations,
             linear,
+            states: disp.states.clone(),
         }))
     }
 
@@ -614,16 +638,22 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 used += 1;
             }
         }
-        let residual_rms_sigma = if used > 0 {
-            (sum / T::lit(used as f64)).sqrt()
+        // The misfit per degree of freedom the data leave after the unknowns: with no spare datum
+        // (three taut tendons and three measured tensions for three tensions and a force) nothing
+        // tests the model against the data.
+        let spare = used.saturating_sub(n);
+        let consistency_tested = spare > 0;
+        let residual_rms_sigma = if consistency_tested {
+            (sum / T::lit(spare as f64)).sqrt()
         } else {
-            T::zero()
+            T::lit(f64::NAN)
         };
         let mut quality = TendonQuality {
             tension_std_n: Vec::new(),
             force_std_n: Vector3::repeat(infinite),
             tip_std_m: Vector3::repeat(infinite),
             residual_rms_sigma,
+            consistency_tested,
             force_observable: false,
             determination: Determination::Undetermined,
             tension_determination: Determination::Undetermined,
@@ -631,18 +661,26 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         for _ in 0..self.count {
             let _ = quality.tension_std_n.push(infinite);
         }
-        if residual_rms_sigma > T::lit(3.0) {
+        if consistency_tested && residual_rms_sigma > T::lit(3.0) {
             quality.determination = Determination::Inconsistent;
             quality.tension_determination = Determination::Inconsistent;
         }
-        // What the data alone determine: the data rows' singular values.
-        let data = self.padded(jac, true).svd(false, false);
+        // What the data alone determine: the data rows' singular values (a bounded SVD: it gives
+        // up rather than iterate without end on data it cannot decompose).
+        let eps = T::default_epsilon();
+        let Some(data) = nalgebra::SVD::try_new(self.padded(jac, true), false, false, eps, 200)
+        else {
+            return quality;
+        };
         let largest = data.singular_values.max();
-        let threshold = largest * T::default_epsilon() * T::lit(1e3);
+        let threshold = largest * eps * T::lit(1e3);
         quality.force_observable =
             largest > T::zero() && data.singular_values.iter().all(|s| *s > threshold);
         // The posterior: data and prior, V diag(1 / sigma^2) V^T.
-        let svd = self.padded(jac, false).svd(false, true);
+        let Some(svd) = nalgebra::SVD::try_new(self.padded(jac, false), false, true, eps, 200)
+        else {
+            return quality;
+        };
         let Some(v_t) = svd.v_t else {
             return quality;
         };
@@ -684,6 +722,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             Determination::Undetermined
         } else if quality.force_std_n.max() > self.settings.max_force_std_n
             || worst_tension > self.settings.max_tension_std_n
+            // Determined needs data to spare: without, a model error (a tension sensor's bias, a
+            // wrong stiffness) lands in the force unseen.
+            || !consistency_tested
         {
             Determination::Weak
         } else {
@@ -756,6 +797,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // (measured tensions where there are some).
         let mut theta = Theta::zeros();
         let mut near = None;
+        // A failed estimate is no start.
+        let start = start.filter(|s| s.is_success());
         match start {
             Some(previous) => {
                 for (t, v) in theta.iter_mut().zip(&previous.solved.tensions_n) {
@@ -841,6 +884,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 force_std_n: Vector3::repeat(T::lit(f64::NAN)),
                 tip_std_m: Vector3::repeat(T::lit(f64::NAN)),
                 residual_rms_sigma: T::lit(f64::NAN),
+                consistency_tested: false,
                 force_observable: false,
                 determination: Determination::Undetermined,
                 tension_determination: Determination::Undetermined,
@@ -855,20 +899,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             termination,
             iterations,
             linear,
+            states,
         } = outcome;
         let quality = match &linear {
             Some((jac, d_tip)) => self.quality(&fit, jac, d_tip),
             None => self.failed(&fit.theta, termination).quality,
         };
-        let mut states = Vec::new();
-        for j in 0..self.count {
-            let taut = fit.theta.get(j).is_some_and(|t| *t > T::zero());
-            let _ = states.push(if taut {
-                TendonState::Taut
-            } else {
-                TendonState::Slack
-            });
-        }
         TendonEstimate {
             solved: fit.solved,
             states,
@@ -900,6 +936,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
         let nine = T::lit(9.0);
         let mut verdict = best.quality.determination;
+        // A restart gets a dozen iterations: one that has not come within reach of the answer's
+        // misfit by then is no rival; one that has, but unconverged, leaves the answer unverified.
+        let full = self.settings.max_iterations;
+        self.settings.max_iterations = full.min(RESTART_ITERATIONS);
         let best_theta = |e: &TendonEstimate<T>, count: usize| {
             let mut theta = Theta::zeros();
             for (t, v) in theta.iter_mut().zip(&e.solved.tensions_n) {
@@ -945,11 +985,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                         .determination
                         .at_best(Determination::Unverified);
                     *best = better;
+                    self.settings.max_iterations = full;
                     return Ok(());
                 }
                 verdict = Determination::Ambiguous;
             }
         }
+        self.settings.max_iterations = full;
         best.quality.determination = verdict;
         Ok(())
     }

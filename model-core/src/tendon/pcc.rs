@@ -238,11 +238,41 @@ fn cable_lengths<T: Scalar, A: Attitude<T>, const NODES: usize>(
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     /// The piecewise-constant-curvature shape under tendon tensions `tensions_n` (N, one per tendon,
     /// none negative), and each tendon's path length along its arcs. Closed form: no sweep, no
-    /// solve, always `Converged` (or `NonFinite` if a tendon would fold back on itself).
+    /// solve, `Converged` (or `NonFinite` if a tendon would fold back on itself).
     ///
-    /// `load` and the scene's gravity and point loads are recorded but do not act: this variant
-    /// knows only the tendons' moments. Their effect is its error (MODEL.md §6.9).
+    /// This variant knows only the tendons' moments: a scene with gravity, point loads or a tip load
+    /// is refused (`OutOfRange`), since its answer would not be that scene's equilibrium. To take
+    /// its error knowingly (the model picker measures it), call
+    /// [`Model::solve_tendons_pcc_ignoring_loads`].
     pub fn solve_tendons_pcc(
+        &self,
+        tendons: &Tendons<T>,
+        tensions_n: &[T],
+        load: &TipLoad<T>,
+    ) -> Result<TendonEquilibrium<T>, ModelError> {
+        let rod = self.rod();
+        let zero = nalgebra::Vector3::zeros();
+        let loaded = rod.gravity_m_s2 != zero
+            || rod
+                .loads
+                .iter()
+                .any(|l| l.force_n != zero || l.moment_nm != zero)
+            || load.force_n != zero
+            || load.moment_nm != zero;
+        if loaded {
+            return Err(ModelError::OutOfRange(
+                "gravity or loads (piecewise constant curvature ignores them; \
+                 solve_tendons_pcc_ignoring_loads takes that error knowingly)",
+            ));
+        }
+        self.solve_tendons_pcc_ignoring_loads(tendons, tensions_n, load)
+    }
+
+    /// [`Model::solve_tendons_pcc`] with gravity, point loads and `load` recorded but not acting:
+    /// their effect is this variant's error (MODEL.md §6.9), which the caller takes knowingly. The
+    /// answer reports `Converged` as the closed form of the unloaded arcs, not as the scene's
+    /// equilibrium.
+    pub fn solve_tendons_pcc_ignoring_loads(
         &self,
         tendons: &Tendons<T>,
         tensions_n: &[T],
