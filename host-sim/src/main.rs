@@ -737,13 +737,16 @@ fn main() -> ExitCode {
                 }
             }
             let Some(cables) = cables else {
-                let _ = Cli::command()
-                    .error(
-                        clap::error::ErrorKind::MissingRequiredArgument,
-                        "the scene has no [[tendon]]: give the measured cable lengths, \
-                         --cables L1,L2,L3",
-                    )
-                    .print();
+                let message = "the scene has no [[tendon]]: give the measured cable lengths, \
+                               --cables L1,L2,L3";
+                let kind = clap::error::ErrorKind::MissingRequiredArgument;
+                let mut cli = Cli::command();
+                cli.build();
+                let error = match cli.find_subcommand_mut("estimate") {
+                    Some(estimate) => estimate.error(kind, message),
+                    None => cli.error(kind, message),
+                };
+                let _ = error.print();
                 return Ok(exit::USAGE);
             };
             let estimate = with_model(
