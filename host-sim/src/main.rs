@@ -5,9 +5,10 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand, ValueEnum};
-use host_sim::run::{self, Estimate, Solve, Status, TendonSolve, exit, with_model};
-use host_sim::scene::{Actuation, Control, Scene, SceneError};
+use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
+use host_sim::plots::Figure;
+use host_sim::run::{self, Estimate, Solve, Status, TendonInverse, TendonSolve, exit, with_model};
+use host_sim::scene::{Actuation, Control, Scene, SceneError, TensionArgs};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
 
@@ -45,7 +46,20 @@ Tendons (host-sim/SCENES.md): solve also prints each tendon's tension, path leng
 displacement, state and slack (JSON: a \"tendons\" object; CSV: five columns per tendon before
 \"status\"); without an answer only the given tensions or displacements. Stability is always
 \"Unchecked\" with tendons (no energy test yet), with the warning. Displacement control is an
-answer only if the search for the tensions converged (exit 3 otherwise).";
+answer only if the search for the tensions converged (exit 3 otherwise).
+
+Estimate on a scene with tendons (host-sim/SCENES.md): from the spool displacements
+(--displacements or [actuation] displacements_m) and optionally measured tensions
+(--tensions-measured with --tension-std or --tension-stds, or [estimate.tendons]), the tensions
+with their standard deviations and states, the tip force with its standard deviation, the tip and
+its standard deviation, the shape; force_observable, the determination and the tensions' own
+verdict (JSON status.tension_determination), the residual's rms in standard deviations, the fit's
+sweeps. From displacements alone the tip force is not observable: determination Undetermined,
+exit 0, and the tip force is not printed (null; empty CSV cells; a sentence in the text and a
+warning), never guessed. Exit 3 when the fit did not converge, 4 when Inconsistent, as above.
+
+--plot FILE.svg|FILE.png (solve and estimate, any scene): the robot in three projections (mm),
+tendons dashed when slack, an estimate's tip 1-sigma ellipse; nothing drawn without an answer.";
 
 #[derive(Parser)]
 #[command(
@@ -123,28 +137,54 @@ enum Command {
         /// Write to this file instead of standard output.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Also draw the robot into this file, SVG or PNG by its extension: the backbone in the
+        /// x-y, x-z and y-z projections (mm, equal scale on each panel's axes), the base plate and
+        /// guides, each tendon's path (dashed when slack) and each cable's. Not drawn without an
+        /// answer.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
-    /// Estimate the tip force of a scene's robot from measured cable lengths.
-    /// Exits 3 when the solve gives no answer, 4 when no load explains the lengths (see below).
+    /// Estimate the tip force of a scene's robot: from measured cable lengths (--cables), or for a
+    /// scene with tendons, the tensions, the tip force and the shape from the spool displacements
+    /// and optionally measured tensions (host-sim/SCENES.md).
+    /// Exits 3 when the solve gives no answer, 4 when no load explains the measurements (see below).
     #[command(after_help = EXIT_STATUS)]
     Estimate {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Measured cable lengths, m, one per cable: L1,L2,L3. A value may start with a minus sign
-        /// (it is then refused as a length, with exit 1, not taken for an option).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            required = true,
-            allow_hyphen_values = true
-        )]
-        cables: Vec<f64>,
+        /// Measured cable lengths, m, one per cable: L1,L2,L3 (required for a scene without
+        /// tendons; refused for one with tendons). A value may start with a minus sign (it is then
+        /// refused as a length, with exit 1, not taken for an option).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        cables: Option<Vec<f64>>,
+        /// Tendons: the spool displacements, m, one per [[tendon]] in order, positive when taken
+        /// in from the straight unloaded rod's zero-tension setting: D1,D2,D3. Overrides the
+        /// scene's [actuation] displacements_m. Alone they cannot determine a tip force
+        /// (Undetermined: the tip force is printed as null).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        displacements: Option<Vec<f64>>,
+        /// Tendons: measured tensions, N, one per [[tendon]]: T1,T2,T3 (motor current, load
+        /// cells), with --tension-std or --tension-stds. With them the tip force is observable.
+        /// Overrides [estimate.tendons] tensions_measured_n.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        tensions_measured: Option<Vec<f64>>,
+        /// Tendons: one standard deviation for every measured tension, N.
+        #[arg(long, allow_hyphen_values = true, conflicts_with = "tension_stds")]
+        tension_std: Option<f64>,
+        /// Tendons: a standard deviation per measured tension, N: S1,S2,S3.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        tension_stds: Option<Vec<f64>>,
         /// Output format.
         #[arg(long, value_enum, default_value_t = Format::Text)]
         format: Format,
         /// Write to this file instead of standard output.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Also draw the estimate into this file, SVG or PNG by its extension: as `solve --plot`,
+        /// with the tip's 1-sigma ellipse in each projection (axis-aligned, from the tip's standard
+        /// deviation along each axis). Not drawn without an answer.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// The accuracy-vs-cost study of the model's variants (f64/f32, frames, reductions, steps):
     /// report/accuracy_cost.md, .csv and the Pareto plot. `report/study.sh` adds the micromath rows.
@@ -337,6 +377,211 @@ fn estimate_text(e: &run::EstimateOutput) -> String {
     t
 }
 
+/// The tendons' estimate, as text.
+fn tendon_estimate_text(e: &run::TendonEstimateOutput) -> String {
+    let mut t = String::new();
+    status_text(&mut t, &e.status);
+    let _ = writeln!(t, "scene: {}", e.scene);
+    let given = &e.tendons;
+    let _ = writeln!(t, "spool displacements given {:?} m", given.displacements_m);
+    match (&given.tensions_measured_n, &given.tension_measured_std_n) {
+        (Some(v), Some(s)) => {
+            let _ = writeln!(t, "tensions measured {v:?} N, 1 sd {s:?} N");
+        }
+        _ => {
+            let _ = writeln!(t, "tensions measured: none");
+        }
+    }
+    let s = &e.settings;
+    let _ = writeln!(
+        t,
+        "settings: displacement sd {:e} m, model length sd {:e} m, force prior sd {} N, \
+         max force sd {} N, max tension sd {} N, scan reach {}",
+        s.displacement_std_m,
+        s.model_length_std_m,
+        s.force_prior_std_n,
+        s.max_force_std_n,
+        s.max_tension_std_n,
+        s.scan_reach
+    );
+    let _ = writeln!(
+        t,
+        "fit: termination {}, {} iterations, {} sweeps",
+        e.fit.termination, e.fit.iterations, e.fit.sweeps
+    );
+    let _ = writeln!(t, "solve: {:?}", e.report);
+    let (
+        Some(shape),
+        Some(tip),
+        Some(tip_sd),
+        Some(rms),
+        Some(observable),
+        Some(tau),
+        Some(tau_sd),
+        Some(states),
+        Some(path),
+        Some(slack),
+        Some(residual),
+    ) = (
+        &e.shape,
+        &e.tip_position_m,
+        &e.tip_position_std_m,
+        e.residual_rms_sigma,
+        e.force_observable,
+        &given.tensions_n,
+        &given.tension_std_n,
+        &given.states,
+        &given.path_m,
+        &given.slack_m,
+        &given.displacement_residual_m,
+    )
+    else {
+        let _ = writeln!(
+            t,
+            "no answer: no tensions, tip force, tip position or shape (the failed iterate is not \
+             printed)"
+        );
+        return t;
+    };
+    let _ = writeln!(
+        t,
+        "tendon  tension_n  tension_sd_n  state  path_m  slack_m  displacement_residual_m{}",
+        if given.tension_residual_n.is_some() {
+            "  tension_residual_n"
+        } else {
+            ""
+        }
+    );
+    for j in 0..tau.len() {
+        let cell = |v: &[f64]| v.get(j).map_or(String::new(), f64::to_string);
+        let mut row = format!(
+            "{j}  {}  {}  {}  {}  {}  {}",
+            cell(tau),
+            cell(tau_sd),
+            states.get(j).copied().unwrap_or_default(),
+            cell(path),
+            cell(slack),
+            cell(residual)
+        );
+        if let Some(r) = &given.tension_residual_n {
+            let _ = write!(row, "  {}", cell(r));
+        }
+        let _ = writeln!(t, "{row}");
+    }
+    match (&e.tip_force_n, &e.tip_force_std_n) {
+        (Some(f), Some(sd)) => {
+            let _ = writeln!(t, "tip force {f:?} N");
+            let _ = writeln!(t, "  1 sd    {sd:?} N");
+        }
+        _ => {
+            let _ = writeln!(
+                t,
+                "tip force: not observable from the spool displacements alone (Undetermined): \
+                 not estimated; measure the tensions too (--tensions-measured)"
+            );
+        }
+    }
+    let _ = writeln!(t, "tip position {tip:?} m");
+    let _ = writeln!(t, "  1 sd        {tip_sd:?} m");
+    let verdict = |d: &Option<Option<String>>| match d {
+        Some(Some(d)) => d.clone(),
+        _ => "none".to_string(),
+    };
+    let _ = writeln!(
+        t,
+        "determination: {}; tensions: {}; force observable: {}; residual rms {rms:.3} sd",
+        verdict(&e.status.determination),
+        verdict(&e.status.tension_determination),
+        if observable { "yes" } else { "no" }
+    );
+    t.push_str(&run::shape_csv(Some(shape), &e.status));
+    t
+}
+
+/// Draws `figure` into `path` when asked; says on standard error what became of it.
+fn draw_plot(path: Option<&PathBuf>, figure: Option<&Figure>) -> Result<(), SceneError> {
+    let Some(path) = path else {
+        return Ok(());
+    };
+    match figure {
+        Some(f) => {
+            host_sim::plots::draw_figure(f, path)?;
+            eprintln!("plot written to {}", path.display());
+        }
+        None => eprintln!(
+            "--plot: nothing drawn to {}: there is no answer to draw",
+            path.display()
+        ),
+    }
+    Ok(())
+}
+
+/// Checks a `--plot` path and the font before the work, so that a bad path fails at once.
+fn check_plot(path: Option<&PathBuf>) -> Result<(), SceneError> {
+    if let Some(path) = path {
+        host_sim::plots::PlotFormat::of(path)?;
+        host_sim::plots::ensure_font()?;
+    }
+    Ok(())
+}
+
+/// `estimate` on a scene with tendons: the displacements from the command line or the scene's
+/// `[actuation]`, the measured tensions from either ([`Scene::tension_measurement`]).
+fn estimate_tendons(
+    scene: &Scene,
+    displacements: Option<Vec<f64>>,
+    tensions: TensionArgs,
+    format: Format,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+) -> Result<u8, SceneError> {
+    let given = displacements.map(|values| Actuation {
+        control: Control::Displacements,
+        values,
+        key: "--displacements".into(),
+    });
+    let missing = || {
+        SceneError::new(
+            "actuation",
+            "missing: estimate needs the spool displacements: give [actuation] displacements_m \
+             or --displacements D1,D2,D3 (m, one per [[tendon]])",
+        )
+    };
+    if given.is_none() && scene.actuation.is_none() {
+        return Err(missing());
+    }
+    let actuation = scene.actuation_or(given)?.ok_or_else(missing)?;
+    if actuation.control != Control::Displacements {
+        return Err(SceneError::new(
+            actuation.key,
+            "estimate needs the spool displacements, not tensions: give [actuation] \
+             displacements_m or --displacements (to use tensions as measurements, give \
+             --tensions-measured with --tension-std, or [estimate.tendons] tensions_measured_n)",
+        ));
+    }
+    let measured = scene.tension_measurement(tensions)?;
+    let settings = scene.tendon_inverse_settings()?;
+    let estimate = with_model(
+        scene,
+        TendonInverse {
+            scene,
+            displacements: actuation,
+            measured,
+            settings,
+            plot: plot.is_some(),
+        },
+    )?;
+    status_stderr(&estimate.status);
+    let text = match format {
+        Format::Text => tendon_estimate_text(&estimate),
+        Format::Json => json(&estimate)?,
+        Format::Csv => run::tendon_estimate_csv(&estimate),
+    };
+    emit(&text, out.as_ref())?;
+    draw_plot(plot.as_ref(), estimate.figure.as_ref())?;
+    Ok(estimate.status.exit_code)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -394,8 +639,10 @@ fn main() -> ExitCode {
             tip_moment,
             format,
             out,
+            plot,
         } => (|| {
             let scene = Scene::load(&scene)?;
+            check_plot(plot.as_ref())?;
             let mut load = scene.tip_load()?;
             if let Some(f) = tip_force {
                 load.force_n = f;
@@ -423,6 +670,7 @@ fn main() -> ExitCode {
                         scene: &scene,
                         load,
                         actuation,
+                        plot: plot.is_some(),
                     },
                 )?,
                 None => with_model(
@@ -430,6 +678,7 @@ fn main() -> ExitCode {
                     Solve {
                         scene: &scene,
                         load,
+                        plot: plot.is_some(),
                     },
                 )?,
             };
@@ -440,27 +689,72 @@ fn main() -> ExitCode {
                 Format::Csv => run::solution_csv(&solution),
             };
             emit(&text, out.as_ref())?;
+            draw_plot(plot.as_ref(), solution.figure.as_ref())?;
             Ok(solution.status.exit_code)
         })(),
         Command::Estimate {
             scene,
             cables,
+            displacements,
+            tensions_measured,
+            tension_std,
+            tension_stds,
             format,
             out,
+            plot,
         } => (|| {
             let scene = Scene::load(&scene)?;
+            check_plot(plot.as_ref())?;
             if !scene.tendons.is_empty() {
-                return Err(SceneError::new(
-                    "tendon",
-                    "estimate does not model tendons yet: the inverse would ignore their pull \
-                     (solve a tendon scene with `host-sim solve`)",
-                ));
+                if cables.is_some() {
+                    return Err(SceneError::new(
+                        "--cables",
+                        "the scene has [[tendon]]: it is estimated from the spool displacements \
+                         (--displacements or [actuation] displacements_m) and optionally \
+                         measured tensions (--tensions-measured); the tendon inverse does not \
+                         use cable lengths",
+                    ));
+                }
+                let tensions = TensionArgs {
+                    tensions_n: tensions_measured,
+                    std_n: tension_std,
+                    stds_n: tension_stds,
+                };
+                return estimate_tendons(&scene, displacements, tensions, format, out, plot);
             }
+            for (given, key) in [
+                (displacements.is_some(), "--displacements"),
+                (tensions_measured.is_some(), "--tensions-measured"),
+                (tension_std.is_some(), "--tension-std"),
+                (tension_stds.is_some(), "--tension-stds"),
+            ] {
+                if given {
+                    return Err(SceneError::new(
+                        key,
+                        "the scene has no [[tendon]] (this is for the tendon inverse; a scene \
+                         without tendons is estimated from --cables)",
+                    ));
+                }
+            }
+            let Some(cables) = cables else {
+                let message = "the scene has no [[tendon]]: give the measured cable lengths, \
+                               --cables L1,L2,L3";
+                let kind = clap::error::ErrorKind::MissingRequiredArgument;
+                let mut cli = Cli::command();
+                cli.build();
+                let error = match cli.find_subcommand_mut("estimate") {
+                    Some(estimate) => estimate.error(kind, message),
+                    None => cli.error(kind, message),
+                };
+                let _ = error.print();
+                return Ok(exit::USAGE);
+            };
             let estimate = with_model(
                 &scene,
                 Estimate {
                     scene: &scene,
                     measured_m: cables,
+                    plot: plot.is_some(),
                 },
             )?;
             status_stderr(&estimate.status);
@@ -471,6 +765,7 @@ fn main() -> ExitCode {
                 Format::Csv => run::shape_csv(shape, &estimate.status),
             };
             emit(&text, out.as_ref())?;
+            draw_plot(plot.as_ref(), estimate.figure.as_ref())?;
             Ok(estimate.status.exit_code)
         })(),
     };

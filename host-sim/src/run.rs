@@ -21,7 +21,18 @@ use model_core::{
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use crate::plots::Figure;
 use crate::scene::{Actuation, AttitudeChoice, Control, Scene, SceneError};
+
+mod figure;
+mod tendon_estimate;
+
+use figure::{FigureSpec, figure};
+pub use tendon_estimate::{
+    FitReport, InverseSettingsOutput, TENDON_ESTIMATE_KEYS, TENDON_ESTIMATE_TENDON_KEYS,
+    TendonEstimateOutput, TendonEstimateTendons, TendonInverse, tendon_estimate_csv,
+    tendon_estimate_csv_columns,
+};
 
 /// Work that needs a model of some frame representation.
 pub trait WithModel {
@@ -117,6 +128,10 @@ pub struct Status {
     /// answer to judge.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub determination: Option<Option<String>>,
+    /// `estimate` on a scene with tendons only (absent otherwise): the verdict on the tensions
+    /// alone; `null` when there is no answer to judge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tension_determination: Option<Option<String>>,
     /// One sentence: what the output is and why.
     pub summary: String,
     /// What the answer gives up (stability not checked), also printed to standard error.
@@ -187,6 +202,7 @@ impl Status {
             // Determination is printed with `{:?}` and never matched exhaustively: model-core may add
             // verdicts (`Ambiguous`), which then show here as they are.
             determination: determination.map(|d| verdict.has_numbers().then(|| format!("{d:?}"))),
+            tension_determination: None,
             summary,
             warnings,
         }
@@ -202,28 +218,95 @@ impl Status {
         displacement: Option<Termination>,
     ) -> Self {
         let mut status = Self::new(report, check_stability, None);
-        if let Some(t) = displacement.filter(|t| !t.is_success())
-            && status.verdict == Verdict::Answer
-        {
-            status.verdict = Verdict::NoAnswer;
-            status.exit_code = Verdict::NoAnswer.exit_code();
-            status.termination = format!("{t:?}");
-            status.summary = format!(
-                "no answer: no tensions found that explain the spool displacements (the \
-                 displacement solve ended {t:?}); the failed iterate's shape and numbers are not \
-                 printed"
+        if let Some(t) = displacement.filter(|t| !t.is_success()) {
+            status.no_answer_from_search(
+                t,
+                format!(
+                    "no answer: no tensions found that explain the spool displacements (the \
+                     displacement solve ended {t:?}); the failed iterate's shape and numbers are \
+                     not printed"
+                ),
             );
         }
-        if status.verdict == Verdict::Answer
+        status.warn_tendon_stability(report, check_stability);
+        status
+    }
+
+    /// The status of a tendon estimate: that of its last forward solve (`report`), and the fit of
+    /// the tensions and the tip force (`fit`), which must also have converged; with the verdicts
+    /// (`determination` on the whole estimate, `tension_determination` on the tensions alone). An
+    /// estimate whose tip force the data do not determine (`force_observable` false) says so in a
+    /// warning; so does the unchecked stability, as for a tendon solve.
+    pub fn tendon_estimate(
+        report: &SolveReport<f64>,
+        check_stability: bool,
+        fit: Termination,
+        determination: Determination,
+        tension_determination: Determination,
+        force_observable: bool,
+        force_prior_std_n: f64,
+    ) -> Self {
+        let mut status = Self::new(report, check_stability, Some(determination));
+        if !fit.is_success() {
+            // Whether or not its last forward solve failed too, the fit is what gave no answer.
+            status.verdict = Verdict::Answer;
+            status.no_answer_from_search(
+                fit,
+                format!(
+                    "no answer: the fit of the tensions and the tip force to the measurements \
+                     ended {fit:?} (its last forward solve {:?}); the failed iterate's shape and \
+                     numbers are not printed",
+                    report.termination
+                ),
+            );
+        }
+        let answer = status.verdict.has_numbers();
+        status.tension_determination = Some(answer.then(|| format!("{tension_determination:?}")));
+        if status.verdict == Verdict::Answer {
+            let _ = write!(status.summary, "; tensions {tension_determination:?}");
+            if !force_observable {
+                status.summary.push_str("; tip force not observable");
+            }
+        }
+        status.warn_tendon_stability(report, check_stability);
+        if answer && !force_observable {
+            status.warnings.push(format!(
+                "the tip force is not observable from the spool displacements alone \
+                 (determination Undetermined): it is not estimated (printed as null); the \
+                 tensions, the tip and the shape are those at the prior's zero tip force, and \
+                 their standard deviations include its {force_prior_std_n} N per component; \
+                 measure the tensions too (--tensions-measured) to estimate it"
+            ));
+        }
+        status
+    }
+
+    /// Makes an answer no answer when the search around its forward solve (for the tensions, or
+    /// the fit of an estimate) ended `termination` other than converged, with `summary`.
+    fn no_answer_from_search(&mut self, termination: Termination, summary: String) {
+        if termination.is_success() || self.verdict == Verdict::NoAnswer {
+            return;
+        }
+        self.verdict = Verdict::NoAnswer;
+        self.exit_code = Verdict::NoAnswer.exit_code();
+        self.termination = format!("{termination:?}");
+        self.summary = summary;
+        if self.determination.is_some() {
+            self.determination = Some(None);
+        }
+    }
+
+    /// The warning that an answer with tendons had no stability test.
+    fn warn_tendon_stability(&mut self, report: &SolveReport<f64>, check_stability: bool) {
+        if self.verdict.has_numbers()
             && check_stability
             && matches!(report.stability, Stability::Unchecked)
         {
-            status.warnings.push(format!(
+            self.warnings.push(format!(
                 "stability not checked (tendons: model-core has no energy test of stability with \
                  tendons yet): {UNCHECKED_STABILITY}"
             ));
         }
-        status
     }
 
     /// The text format's first line.
@@ -236,6 +319,9 @@ impl Status {
         );
         if let Some(Some(d)) = &self.determination {
             let _ = write!(t, ", determination {d}");
+        }
+        if let Some(Some(d)) = &self.tension_determination {
+            let _ = write!(t, ", tensions {d}");
         }
         let _ = write!(t, "; exit {})", self.exit_code);
         t
@@ -414,6 +500,9 @@ pub struct Solution {
     /// The tendons (absent, also from JSON, for a scene without tendons).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tendons: Option<TendonOutput>,
+    /// The figure (`--plot`), for an answer only.
+    #[serde(skip)]
+    pub figure: Option<Figure>,
 }
 
 /// What a tendon solve gives for its tendons. The actuation given (tensions or displacements) is
@@ -478,6 +567,35 @@ pub struct Solve<'a> {
     pub scene: &'a Scene,
     /// The tip load.
     pub load: TipLoad<f64>,
+    /// Also compute the figure (`--plot`).
+    pub plot: bool,
+}
+
+/// The notes under a solve's figure title: its status and its tip load.
+fn solve_notes(status: &Status, load: &TipLoad<f64>) -> Vec<String> {
+    let (f, m) = (load.force_n, load.moment_nm);
+    vec![
+        status.line(),
+        format!(
+            "tip force ({:.4}, {:.4}, {:.4}) N, tip moment ({:.4}, {:.4}, {:.4}) N m",
+            f.x, f.y, f.z, m.x, m.y, m.z
+        ),
+    ]
+}
+
+/// The shape of a dead-load answer at `s_m`.
+fn dead_load_shape<A: Attitude<f64>>(
+    model: &Model<f64, A>,
+    base_strain_per_m: &Vector3<f64>,
+    load: &TipLoad<f64>,
+    s_m: &[f64],
+) -> Result<Vec<ShapePoint<f64>>, SceneError> {
+    let mut points = vec![ShapePoint::default(); s_m.len()];
+    let written = model
+        .shape_at(base_strain_per_m, load, s_m, &mut points)
+        .map_err(|e| SceneError::new("output", e.to_string()))?;
+    points.truncate(written);
+    Ok(points)
 }
 
 impl WithModel for Solve<'_> {
@@ -493,11 +611,23 @@ impl WithModel for Solve<'_> {
         let answer = status.verdict.has_numbers();
         let shape = if answer {
             let s = self.scene.output_points_m(model.length_m())?;
-            let mut points = vec![ShapePoint::default(); s.len()];
-            model
-                .shape(&eq, &s, &mut points)
-                .map_err(|e| SceneError::new("output", e.to_string()))?;
+            let points = dead_load_shape(model, &eq.base_strain_per_m, &eq.load, &s)?;
             Some(points.iter().map(point).collect())
+        } else {
+            None
+        };
+        let figure = if answer && self.plot {
+            let shape = |s: &[f64]| dead_load_shape(model, &eq.base_strain_per_m, &eq.load, s);
+            Some(figure(
+                model,
+                &shape,
+                FigureSpec {
+                    title: format!("solve: {}", self.scene.name),
+                    notes: solve_notes(&status, &self.load),
+                    tendons: None,
+                    tip_std_m: None,
+                },
+            )?)
         } else {
             None
         };
@@ -511,6 +641,7 @@ impl WithModel for Solve<'_> {
             cable_lengths_m: answer.then(|| eq.cable_lengths_m.iter().copied().collect()),
             shape,
             tendons: None,
+            figure,
             status,
         })
     }
@@ -526,6 +657,8 @@ pub struct TendonSolve<'a> {
     pub load: TipLoad<f64>,
     /// The actuation: the scene's ([`Scene::actuation`]) or the command line's.
     pub actuation: Actuation,
+    /// Also compute the figure (`--plot`).
+    pub plot: bool,
 }
 
 impl WithModel for TendonSolve<'_> {
@@ -625,6 +758,36 @@ impl WithModel for TendonSolve<'_> {
         if answer {
             out.path_m = Some(solved.path_m.iter().copied().collect());
         }
+        let figure = match (&out.tensions_n, &out.states) {
+            (Some(tau), Some(states)) if self.plot && answer => {
+                let meta = tau
+                    .iter()
+                    .zip(states)
+                    .enumerate()
+                    .map(|(j, (t, state))| {
+                        let slack = *state == "slack";
+                        let label = if slack {
+                            format!("tendon {j}: {t:.3} N, slack")
+                        } else {
+                            format!("tendon {j}: {t:.3} N")
+                        };
+                        (slack, label)
+                    })
+                    .collect();
+                let shape = |s: &[f64]| tendon_shape(model, &tendons, &solved, s);
+                Some(figure(
+                    model,
+                    &shape,
+                    FigureSpec {
+                        title: format!("solve: {}", self.scene.name),
+                        notes: solve_notes(&status, &self.load),
+                        tendons: Some((&tendons, meta)),
+                        tip_std_m: None,
+                    },
+                )?)
+            }
+            _ => None,
+        };
         Ok(Solution {
             scene: self.scene.name.clone(),
             tip_force_n: arr(&self.load.force_n),
@@ -635,6 +798,7 @@ impl WithModel for TendonSolve<'_> {
             cable_lengths_m,
             shape,
             tendons: Some(out),
+            figure,
             status,
         })
     }
@@ -755,6 +919,9 @@ pub struct EstimateOutput {
     /// The estimate, unless there is no answer.
     #[serde(flatten, serialize_with = "numbers_or_nulls")]
     pub numbers: Option<EstimateNumbers>,
+    /// The figure (`--plot`), for an answer or an inconsistent estimate's closest fit.
+    #[serde(skip)]
+    pub figure: Option<Figure>,
 }
 
 /// Flattens the estimate's numbers into the output, or writes each of their keys as `null`.
@@ -794,6 +961,8 @@ pub struct Estimate<'a> {
     pub scene: &'a Scene,
     /// Measured lengths, m.
     pub measured_m: Vec<f64>,
+    /// Also compute the figure (`--plot`).
+    pub plot: bool,
 }
 
 impl Estimate<'_> {
@@ -843,10 +1012,7 @@ impl WithModel for Estimate<'_> {
         let status = Status::new(&est.report, settings.check_stability, Some(q.determination));
         let numbers = if status.verdict.has_numbers() {
             let s = self.scene.output_points_m(model.length_m())?;
-            let mut points = vec![ShapePoint::default(); s.len()];
-            model
-                .shape_at(&est.base_strain_per_m, &est.load, &s, &mut points)
-                .map_err(|e| SceneError::new("output", e.to_string()))?;
+            let points = dead_load_shape(model, &est.base_strain_per_m, &est.load, &s)?;
             Some(EstimateNumbers {
                 tip_force_n: arr(&est.params),
                 tip_force_std_n: arr(&q.force_std_n),
@@ -866,12 +1032,42 @@ impl WithModel for Estimate<'_> {
         } else {
             None
         };
+        let figure = if status.verdict.has_numbers() && self.plot {
+            let shape = |s: &[f64]| dead_load_shape(model, &est.base_strain_per_m, &est.load, s);
+            let (f, sd) = (est.params, q.force_std_n);
+            let mut notes = vec![
+                status.line(),
+                format!(
+                    "tip force: Fx {:.4} ± {:.4}, Fy {:.4} ± {:.4}, Fz {:.4} ± {:.4} N",
+                    f.x, sd.x, f.y, sd.y, f.z, sd.z
+                ),
+            ];
+            if q.determination == Determination::Inconsistent {
+                notes.push(
+                    "INCONSISTENT: no load explains the cable lengths; this is the closest fit"
+                        .to_string(),
+                );
+            }
+            Some(figure(
+                model,
+                &shape,
+                FigureSpec {
+                    title: format!("estimate: {}", self.scene.name),
+                    notes,
+                    tendons: None,
+                    tip_std_m: Some(q.tip_std_m),
+                },
+            )?)
+        } else {
+            None
+        };
         Ok(EstimateOutput {
             status,
             scene: self.scene.name.clone(),
             measured_m: self.measured_m.clone(),
             report: Report::from(&est.report),
             numbers,
+            figure,
         })
     }
 }
@@ -1057,6 +1253,7 @@ mod tests {
             measured_m: vec![0.39],
             report: Report::from(&report(Termination::Stalled, Stability::Unchecked)),
             numbers: None,
+            figure: None,
         };
         let v = serde_json::to_value(&failed).unwrap();
         for key in ESTIMATE_KEYS {
@@ -1157,6 +1354,49 @@ mod tests {
             (s.verdict, s.termination.as_str()),
             (Verdict::NoAnswer, "ContinuationFailed")
         );
+    }
+
+    #[test]
+    fn a_tendon_estimate_status_needs_the_fit_and_says_what_is_not_observable() {
+        use Determination::*;
+        let converged = report(Termination::Converged, Stability::Unchecked);
+        let status = |fit, d, t, observable| {
+            Status::tendon_estimate(&converged, true, fit, d, t, observable, 1.0)
+        };
+        // Tensions measured: an answer with both verdicts.
+        let s = status(Termination::Converged, Weak, Determined, true);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::Answer, 0));
+        assert_eq!(s.determination, Some(Some("Weak".into())));
+        assert_eq!(s.tension_determination, Some(Some("Determined".into())));
+        assert!(s.line().contains("determination Weak, tensions Determined"));
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        // Displacements alone: an answer that says the force is not observable.
+        let s = status(Termination::Converged, Undetermined, Weak, false);
+        assert_eq!(s.verdict, Verdict::Answer);
+        assert!(s.summary.contains("tip force not observable"), "{s:?}");
+        assert!(s.warnings.iter().any(|w| w.contains("not observable")));
+        // Inconsistent: exit 4, the closest fit's verdicts kept.
+        let s = status(Termination::Converged, Inconsistent, Inconsistent, true);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::Inconsistent, 4));
+        assert_eq!(s.tension_determination, Some(Some("Inconsistent".into())));
+        // A fit that did not converge: no answer, no verdicts, no warnings about the answer.
+        let s = status(Termination::Stalled, Undetermined, Undetermined, false);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::NoAnswer, 3));
+        assert_eq!(s.termination, "Stalled");
+        assert_eq!(s.determination, Some(None));
+        assert_eq!(s.tension_determination, Some(None));
+        assert!(s.summary.starts_with("no answer: the fit"), "{s:?}");
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // Its last forward solve failed too: still the fit's termination and words.
+        let failed = report(Termination::Stalled, Stability::Unchecked);
+        let s = Status::tendon_estimate(&failed, true, Termination::Stalled, Weak, Weak, true, 1.0);
+        assert_eq!(s.verdict, Verdict::NoAnswer);
+        assert!(s.summary.starts_with("no answer: the fit"), "{s:?}");
+        // The fit converged but its forward solve did not: no answer either.
+        let s =
+            Status::tendon_estimate(&failed, true, Termination::Converged, Weak, Weak, true, 1.0);
+        assert_eq!((s.verdict, s.exit_code), (Verdict::NoAnswer, 3));
+        assert_eq!(s.tension_determination, Some(None));
     }
 
     #[test]

@@ -20,7 +20,7 @@ use std::path::Path;
 use model_core::{
     Attitude, Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, MAX_TENDONS,
     Material, Model, PointLoad, Rod, Section, ShootingSettings, Sliding, Stiffness, StrainModel,
-    Tendon, Tendons, TipLoad,
+    Tendon, TendonInverseSettings, Tendons, TipLoad,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
@@ -404,6 +404,31 @@ impl Actuation {
     }
 }
 
+/// Measured tensions from the command line, for [`Scene::tension_measurement`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TensionArgs {
+    /// `--tensions-measured`, N.
+    pub tensions_n: Option<Vec<f64>>,
+    /// `--tension-std`, N (one for all).
+    pub std_n: Option<f64>,
+    /// `--tension-stds`, N (one per tendon).
+    pub stds_n: Option<Vec<f64>>,
+}
+
+/// Measured tensions, checked: one value and one standard deviation per tendon, N.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TensionMeasurement {
+    /// The measured tensions, N.
+    pub tensions_n: Vec<f64>,
+    /// Their standard deviations, N (positive).
+    pub std_n: Vec<f64>,
+    /// Where the tensions come from (`--tensions-measured` or
+    /// `estimate.tendons.tensions_measured_n`).
+    pub key: String,
+    /// Where the standard deviations come from.
+    pub std_key: String,
+}
+
 /// A point load.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -517,6 +542,34 @@ pub struct EstimateSpec {
     /// A force component with a larger standard deviation makes the estimate "weak", N.
     #[serde(default = "default_max_force_std")]
     pub max_force_std_n: f64,
+    /// The tendon inverse's own settings and measured tensions (`[estimate.tendons]`,
+    /// host-sim/SCENES.md); only for a scene with `[[tendon]]`.
+    #[serde(default)]
+    pub tendons: Option<TendonEstimateSpec>,
+}
+
+/// `[estimate.tendons]`: what the tendon inverse needs besides the spool displacements and the
+/// `[estimate]` table's `resolution_m` and `max_force_std_n`. Every key is optional.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TendonEstimateSpec {
+    /// Measured tensions (motor current, a load cell), N, one per `[[tendon]]`.
+    pub tensions_measured_n: Option<Vec<f64>>,
+    /// One standard deviation for every measured tension, N.
+    pub tension_std_n: Option<f64>,
+    /// A standard deviation per measured tension, N, one per `[[tendon]]`.
+    pub tension_stds_n: Option<Vec<f64>>,
+    /// The model's own error in a tendon path, m, added in quadrature to the encoder's (default 0).
+    pub model_length_std_m: Option<f64>,
+    /// The prior's standard deviation of each tip force component, N (default 1).
+    pub force_prior_std_n: Option<f64>,
+    /// A tension with a larger standard deviation makes the estimate "weak", N (default 0.05).
+    pub max_tension_std_n: Option<f64>,
+    /// How far the search for other answers restarts, in buckling scales `E I / L^2` of tip force
+    /// (default 3; 0: no search, and the verdict is at best `Unverified`).
+    pub scan_reach: Option<f64>,
+    /// Levenberg-Marquardt iterations per fit (default 40).
+    pub max_iterations: Option<u16>,
 }
 
 fn default_resolution() -> f64 {
@@ -532,6 +585,7 @@ impl Default for EstimateSpec {
         Self {
             resolution_m: default_resolution(),
             max_force_std_n: default_max_force_std(),
+            tendons: None,
         }
     }
 }
@@ -617,6 +671,7 @@ impl Scene {
                 format!("{n} [[tendon]] tables; at most {MAX_TENDONS} (model-core's MAX_TENDONS)"),
             ));
         }
+        self.check_tendon_estimate_counts()?;
         let Some(a) = &self.actuation else {
             return Ok(());
         };
@@ -655,6 +710,197 @@ impl Scene {
             ));
         }
         Ok(())
+    }
+
+    /// `[estimate.tendons]`: only with tendons; its lists one entry per tendon; not both
+    /// `tension_std_n` and `tension_stds_n`.
+    fn check_tendon_estimate_counts(&self) -> Result<(), SceneError> {
+        let Some(t) = &self.estimate.tendons else {
+            return Ok(());
+        };
+        let n = self.tendons.len();
+        if n == 0 {
+            return Err(SceneError::new(
+                "estimate.tendons",
+                "the scene has no [[tendon]] to estimate",
+            ));
+        }
+        if t.tension_std_n.is_some() && t.tension_stds_n.is_some() {
+            return Err(SceneError::new(
+                "estimate.tendons",
+                "give either tension_std_n (one for all) or tension_stds_n (one per tendon), not \
+                 both",
+            ));
+        }
+        for (key, list) in [
+            (
+                "estimate.tendons.tensions_measured_n",
+                &t.tensions_measured_n,
+            ),
+            ("estimate.tendons.tension_stds_n", &t.tension_stds_n),
+        ] {
+            if let Some(v) = list
+                && v.len() != n
+            {
+                return Err(SceneError::new(
+                    key,
+                    format!(
+                        "{} for {} (one per [[tendon]], in order)",
+                        counted(v.len(), "value"),
+                        counted(n, "tendon")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The tendon inverse's settings: the displacement's standard deviation from
+    /// `[estimate] resolution_m` (`resolution / sqrt 12`), `max_force_std_n` from `[estimate]`, the
+    /// rest from `[estimate.tendons]` or model-core's defaults. Each value is checked, naming its key.
+    pub fn tendon_inverse_settings(&self) -> Result<TendonInverseSettings<f64>, SceneError> {
+        let e = &self.estimate;
+        let positive = |key: &str, x: f64| {
+            if x.is_finite() && x > 0.0 {
+                Ok(x)
+            } else {
+                Err(SceneError::new(
+                    key,
+                    format!("{x}: must be a positive number"),
+                ))
+            }
+        };
+        let non_negative = |key: &str, x: f64| {
+            if x.is_finite() && x >= 0.0 {
+                Ok(x)
+            } else {
+                Err(SceneError::new(
+                    key,
+                    format!("{x}: must be a number not below zero"),
+                ))
+            }
+        };
+        let defaults = TendonInverseSettings::<f64>::default();
+        let t = e.tendons.clone().unwrap_or_default();
+        Ok(TendonInverseSettings {
+            max_iterations: t.max_iterations.unwrap_or(defaults.max_iterations),
+            displacement_std_m: positive("estimate.resolution_m", e.resolution_m)? / 12f64.sqrt(),
+            model_length_std_m: non_negative(
+                "estimate.tendons.model_length_std_m",
+                t.model_length_std_m.unwrap_or(defaults.model_length_std_m),
+            )?,
+            force_prior_std_n: positive(
+                "estimate.tendons.force_prior_std_n",
+                t.force_prior_std_n.unwrap_or(defaults.force_prior_std_n),
+            )?,
+            max_force_std_n: positive("estimate.max_force_std_n", e.max_force_std_n)?,
+            max_tension_std_n: positive(
+                "estimate.tendons.max_tension_std_n",
+                t.max_tension_std_n.unwrap_or(defaults.max_tension_std_n),
+            )?,
+            scan_reach: non_negative(
+                "estimate.tendons.scan_reach",
+                t.scan_reach.unwrap_or(defaults.scan_reach),
+            )?,
+        })
+    }
+
+    /// The measured tensions for the tendon inverse, if any: the command line's (`--tensions-measured`
+    /// with `--tension-std` or `--tension-stds`) before the scene's (`[estimate.tendons]`). Measured
+    /// tensions need a standard deviation; a standard deviation from the command line needs measured
+    /// tensions (one in the scene alone is the sensor's, kept for when tensions are given). One value
+    /// per tendon, each finite; every standard deviation positive. Errors name the key and the index.
+    pub fn tension_measurement(
+        &self,
+        given: TensionArgs,
+    ) -> Result<Option<TensionMeasurement>, SceneError> {
+        let n = self.tendons.len();
+        let spec = self.estimate.tendons.clone().unwrap_or_default();
+        let tensions = match (given.tensions_n, spec.tensions_measured_n) {
+            (Some(v), _) => Some((v, "--tensions-measured")),
+            (None, Some(v)) => Some((v, "estimate.tendons.tensions_measured_n")),
+            (None, None) => None,
+        };
+        // (values, key, whether the key is one value for all, whether from the command line)
+        let stds = match (
+            given.std_n,
+            given.stds_n,
+            spec.tension_std_n,
+            spec.tension_stds_n,
+        ) {
+            (Some(s), _, _, _) => Some((vec![s; n], "--tension-std", true, true)),
+            (None, Some(v), _, _) => Some((v, "--tension-stds", false, true)),
+            (None, None, Some(s), _) => {
+                Some((vec![s; n], "estimate.tendons.tension_std_n", true, false))
+            }
+            (None, None, None, Some(v)) => {
+                Some((v, "estimate.tendons.tension_stds_n", false, false))
+            }
+            (None, None, None, None) => None,
+        };
+        if n == 0 {
+            let key = tensions
+                .as_ref()
+                .map(|t| t.1)
+                .or(stds.as_ref().filter(|s| s.3).map(|s| s.1));
+            return match key {
+                Some(key) => Err(SceneError::new(key, "the scene has no [[tendon]]")),
+                None => Ok(None),
+            };
+        }
+        let (tensions_n, key) = match (tensions, &stds) {
+            (None, Some((_, key, _, true))) => {
+                return Err(SceneError::new(
+                    *key,
+                    "a tension standard deviation without measured tensions (give \
+                     --tensions-measured, one per [[tendon]])",
+                ));
+            }
+            (None, _) => return Ok(None),
+            (Some(t), _) => t,
+        };
+        let Some((std_n, std_key, one_for_all, _)) = stds else {
+            return Err(SceneError::new(
+                key,
+                "measured tensions need their standard deviation: give --tension-std (one for \
+                 all, N) or --tension-stds (one per tendon, N), or tension_std_n or \
+                 tension_stds_n in [estimate.tendons]",
+            ));
+        };
+        for (list, key) in [(&tensions_n, key), (&std_n, std_key)] {
+            if list.len() != n {
+                return Err(SceneError::new(
+                    key,
+                    format!(
+                        "{} for {} (one per [[tendon]], in order)",
+                        counted(list.len(), "value"),
+                        counted(n, "tendon")
+                    ),
+                ));
+            }
+        }
+        for (i, t) in tensions_n.iter().enumerate() {
+            finite(&format!("{key}[{i}]"), *t)?;
+        }
+        for (i, s) in std_n.iter().enumerate() {
+            let field = if one_for_all {
+                std_key.to_string()
+            } else {
+                format!("{std_key}[{i}]")
+            };
+            if !(s.is_finite() && *s > 0.0) {
+                return Err(SceneError::new(
+                    field,
+                    format!("{s} N: a standard deviation must be a positive number"),
+                ));
+            }
+        }
+        Ok(Some(TensionMeasurement {
+            tensions_n,
+            std_n,
+            key: key.to_string(),
+            std_key: std_key.to_string(),
+        }))
     }
 
     /// The tendons' actuation as the scene gives it (`None` for a scene without tendons). A scene

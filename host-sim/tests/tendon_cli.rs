@@ -695,11 +695,11 @@ fn tendon_bad_input_is_refused_naming_the_key() {
         "{}",
         stderr(&out)
     );
-    // The inverse does not model tendons: refused rather than wrong.
+    // The tendon inverse does not use cable lengths: refused rather than ignored.
     let out = host_sim(&["estimate", &bench, "--cables", "0.39,0.39,0.39"]);
     assert_eq!(code(&out), 1);
     assert!(
-        stderr(&out).contains("tendon: estimate does not model tendons"),
+        stderr(&out).contains("--cables: the scene has [[tendon]]"),
         "{}",
         stderr(&out)
     );
@@ -796,4 +796,606 @@ fn tendon_friction_and_sliding_from_the_scene() {
         "tendon[0].friction_coefficient",
         "negative",
     );
+}
+
+/// The tendon bench with 50 steps (the estimates below run many forward solves), `extra` appended.
+fn quick_bench(name: &str, extra: &str) -> String {
+    let text = scene_text("tendon_bench.toml");
+    assert!(text.contains("steps = 200"));
+    write_scene(
+        name,
+        &format!("{}{extra}", text.replace("steps = 200", "steps = 50")),
+    )
+}
+
+/// `estimate` with `args` in JSON: the exit code and the JSON.
+fn estimated(args: &[&str]) -> (i32, Value) {
+    let mut all = vec!["estimate"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--format", "json"]);
+    let out = host_sim(&all);
+    (code(&out), json_of(&out))
+}
+
+/// `value` within three of its reported standard deviations `std` of `truth`.
+fn within_3_std(value: &[f64], std: &[f64], truth: &[f64], what: &str) {
+    assert_eq!(value.len(), truth.len(), "{what}");
+    for (i, ((v, s), t)) in value.iter().zip(std).zip(truth).enumerate() {
+        assert!(s.is_finite() && *s > 0.0, "{what}[{i}]: std {s}");
+        assert!(
+            (v - t).abs() <= 3.0 * s + 1e-9,
+            "{what}[{i}]: {v} vs {t}, {:.2} std",
+            (v - t).abs() / s
+        );
+    }
+}
+
+/// The round trip through the command line: `solve` from tensions and a tip force, its spool
+/// displacements read from its JSON, then `estimate` from those displacements with the true
+/// tensions as measurements (10 mN): the tip force, the tensions and the tip come back within
+/// three reported standard deviations, the force observable.
+#[test]
+fn tendon_estimate_round_trip_through_the_cli() {
+    let path = quick_bench("round-trip", "");
+    let (tensions, force) = ([3.0, 1.5, 0.5], [0.0, -0.1, 0.05]);
+    let forward = solved(&[
+        &path,
+        &format!("--tensions={}", list(&tensions)),
+        &format!("--tip-force={}", list(&force)),
+    ]);
+    let d = numbers(&forward["tendons"]["displacements_m"]);
+    let (code, v) = estimated(&[
+        &path,
+        &format!("--displacements={}", list(&d)),
+        &format!("--tensions-measured={}", list(&tensions)),
+        "--tension-std=0.01",
+    ]);
+    assert_eq!(code, 0, "{}", v["status"]);
+    let status = &v["status"];
+    assert_eq!(status["verdict"], "answer");
+    assert!(
+        ["Determined", "Weak"].contains(&status["determination"].as_str().unwrap_or_default()),
+        "{status}"
+    );
+    assert_eq!(status["tension_determination"], "Determined", "{status}");
+    assert_eq!(v["force_observable"], true);
+    assert_eq!(v["fit"]["termination"], "Converged");
+    within_3_std(
+        &numbers(&v["tip_force_n"]),
+        &numbers(&v["tip_force_std_n"]),
+        &force,
+        "tip force",
+    );
+    let t = &v["tendons"];
+    within_3_std(
+        &numbers(&t["tensions_n"]),
+        &numbers(&t["tension_std_n"]),
+        &tensions,
+        "tensions",
+    );
+    within_3_std(
+        &numbers(&v["tip_position_m"]),
+        &numbers(&v["tip_position_std_m"]),
+        &numbers(&forward["tip_position_m"]),
+        "tip",
+    );
+    assert_eq!(t["states"], serde_json::json!(["taut", "taut", "taut"]));
+    assert_eq!(numbers(&t["displacements_m"]), d);
+    assert_eq!(numbers(&t["tensions_measured_n"]), tensions);
+    assert_eq!(numbers(&t["tension_measured_std_n"]), [0.01; 3]);
+    assert!(
+        numbers(&t["displacement_residual_m"])
+            .iter()
+            .all(|r| r.abs() < 1e-9)
+    );
+    assert!(v["residual_rms_sigma"].as_f64().is_some_and(|r| r < 1.0));
+    assert_eq!(v["shape"].as_array().map(Vec::len), Some(41));
+    // The settings from [estimate]: the encoder's resolution over sqrt 12.
+    let sd = v["settings"]["displacement_std_m"]
+        .as_f64()
+        .unwrap_or_default();
+    assert!((sd - 2.0 * std::f64::consts::PI * 5e-3 / 4096.0 / 12f64.sqrt()).abs() < 1e-15);
+}
+
+/// Displacements alone cannot determine a tip force: `Undetermined`, exit 0, the tip force
+/// `null` (not a guess), and every format says so.
+#[test]
+fn tendon_estimate_from_displacements_alone_is_undetermined_and_says_so() {
+    let path = quick_bench("alone", "");
+    let forward = solved(&[&path, "--tensions=3,1.5,0.5", "--tip-force=0,-0.1,0.05"]);
+    let d = format!(
+        "--displacements={}",
+        list(&numbers(&forward["tendons"]["displacements_m"]))
+    );
+
+    let (code, v) = estimated(&[&path, &d]);
+    assert_eq!(code, 0, "{}", v["status"]);
+    let status = &v["status"];
+    assert_eq!(status["verdict"], "answer");
+    assert_eq!(status["determination"], "Undetermined");
+    assert_eq!(v["force_observable"], false);
+    assert!(
+        v["tip_force_n"].is_null() && v["tip_force_std_n"].is_null(),
+        "{v}"
+    );
+    assert!(
+        status["summary"]
+            .as_str()
+            .is_some_and(|s| s.contains("tip force not observable")),
+        "{status}"
+    );
+    assert!(
+        status["warnings"]
+            .as_array()
+            .is_some_and(|w| w.iter().any(|w| w
+                .as_str()
+                .is_some_and(|w| w.contains("not observable from the spool displacements")))),
+        "{status}"
+    );
+    assert_eq!(v["tendons"]["tensions_measured_n"], Value::Null);
+    assert_eq!(v["tendons"]["tensions_n"].as_array().map(Vec::len), Some(3));
+
+    let out = host_sim(&["estimate", &path, &d]);
+    assert_eq!(self::code(&out), 0);
+    assert!(stderr(&out).contains("not observable"), "{}", stderr(&out));
+    let text = stdout(&out);
+    let first = text.lines().next().unwrap_or_default();
+    assert!(
+        first.contains("determination Undetermined") && first.contains("not observable"),
+        "{text}"
+    );
+    assert!(
+        text.contains("tip force: not observable from the spool displacements alone"),
+        "{text}"
+    );
+    assert!(!text.contains("tip force ["), "{text}");
+    assert!(text.contains("tensions measured: none"), "{text}");
+
+    let out = host_sim(&["estimate", &path, &d, "--format", "csv"]);
+    assert_eq!(self::code(&out), 0);
+    let csv = stdout(&out);
+    let mut rows = csv.lines();
+    let header: Vec<&str> = rows.next().unwrap_or_default().split(',').collect();
+    assert_eq!(header.len(), 10 + 3 * 4 + 13 + 1, "{header:?}");
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no {name}: {header:?}"))
+    };
+    let (fx, observable) = (column("tip_force_x_n"), column("force_observable"));
+    let rows: Vec<Vec<&str>> = rows.map(|r| r.split(',').collect()).collect();
+    assert_eq!(rows.len(), 41);
+    for r in &rows {
+        assert_eq!(r.len(), header.len(), "{r:?}");
+        assert_eq!(r[fx], "", "{r:?}");
+        assert_eq!(r[observable], "false");
+        assert_eq!(r[column("tendon0_state")], "taut");
+        assert_eq!(r[column("status")], "Converged/Unchecked/Undetermined");
+    }
+}
+
+/// Displacements, measured tensions and settings from the scene itself (`[actuation]
+/// displacements_m`, `[estimate.tendons]`), without the search for other answers (scan_reach 0:
+/// `Determined` becomes `Unverified`); text and CSV carry the tip force and the tensions with their deviations.
+#[test]
+fn tendon_estimate_from_the_scene_keys_in_text_and_csv() {
+    let base = quick_bench("scene-keys-forward", "");
+    let forward = solved(&[&base, "--tensions=2,1,0.5", "--tip-force=0.02,-0.05,0"]);
+    let d = numbers(&forward["tendons"]["displacements_m"]);
+    let text = scene_text("tendon_bench.toml")
+        .replace("steps = 200", "steps = 50")
+        .replace(
+            "tensions_n = [3.0, 1.5, 0.0]",
+            &format!("displacements_m = [{}]", list(&d)),
+        );
+    let path = write_scene(
+        "scene-keys",
+        &format!(
+            "{text}\n[estimate.tendons]\ntensions_measured_n = [2.0, 1.0, 0.5]\n\
+             tension_stds_n = [0.01, 0.02, 0.01]\nscan_reach = 0.0\nforce_prior_std_n = 0.5\n"
+        ),
+    );
+    let (code, v) = estimated(&[&path]);
+    assert_eq!(code, 0, "{}", v["status"]);
+    // Without the search a verdict is never Determined.
+    let verdict = v["status"]["determination"]
+        .as_str()
+        .unwrap_or_default()
+        .to_string();
+    assert!(
+        ["Weak", "Unverified"].contains(&verdict.as_str()),
+        "{}",
+        v["status"]
+    );
+    assert_eq!(v["settings"]["scan_reach"], 0.0);
+    assert_eq!(v["settings"]["force_prior_std_n"], 0.5);
+    assert_eq!(
+        numbers(&v["tendons"]["tension_measured_std_n"]),
+        [0.01, 0.02, 0.01]
+    );
+    within_3_std(
+        &numbers(&v["tip_force_n"]),
+        &numbers(&v["tip_force_std_n"]),
+        &[0.02, -0.05, 0.0],
+        "tip force",
+    );
+    // The command line's tensions and deviation override the scene's.
+    let (_, over) = estimated(&[&path, "--tensions-measured=2,1,0.5", "--tension-std=0.05"]);
+    assert_eq!(
+        numbers(&over["tendons"]["tension_measured_std_n"]),
+        [0.05; 3]
+    );
+
+    let out = host_sim(&["estimate", &path]);
+    assert_eq!(self::code(&out), 0);
+    let text = stdout(&out);
+    assert!(text.starts_with("status: converged"), "{text}");
+    assert!(text.contains(&format!("determination {verdict}")), "{text}");
+    assert!(text.contains("tip force ["), "{text}");
+    assert!(
+        text.contains("tensions measured [2.0, 1.0, 0.5] N, 1 sd [0.01, 0.02, 0.01] N"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "tendon  tension_n  tension_sd_n  state  path_m  slack_m  displacement_residual_m  \
+             tension_residual_n"
+        ),
+        "{text}"
+    );
+
+    let out = host_sim(&["estimate", &path, "--format", "csv"]);
+    assert_eq!(self::code(&out), 0);
+    let csv = stdout(&out);
+    let header: Vec<&str> = csv.lines().next().unwrap_or_default().split(',').collect();
+    let row: Vec<&str> = csv.lines().nth(1).unwrap_or_default().split(',').collect();
+    let cell = |name: &str| row[header.iter().position(|h| *h == name).unwrap()];
+    assert!(cell("tip_force_y_n").parse::<f64>().is_ok(), "{csv}");
+    assert!(
+        cell("tendon1_tension_std_n").parse::<f64>().is_ok(),
+        "{csv}"
+    );
+    assert_eq!(cell("force_observable"), "true");
+    assert_eq!(cell("status"), format!("Converged/Unchecked/{verdict}"));
+}
+
+/// Displacements no tensions explain (every spool taken in 5 cm): no answer (exit 3) with every
+/// estimated number null, or an inconsistent closest fit (exit 4); never a confident answer.
+#[test]
+fn a_failed_tendon_estimate_prints_no_numbers() {
+    let path = quick_bench("failed-estimate", "");
+    let (code, v) = estimated(&[
+        &path,
+        "--displacements=0.05,0.05,0.05",
+        "--tensions-measured=1,1,1",
+        "--tension-std=0.01",
+    ]);
+    match code {
+        3 => {
+            assert_eq!(v["status"]["verdict"], "no_answer");
+            assert!(v["status"]["determination"].is_null(), "{}", v["status"]);
+            assert!(v["status"]["tension_determination"].is_null());
+            for key in host_sim::run::TENDON_ESTIMATE_KEYS {
+                assert!(v[key].is_null(), "{key}: {}", v[key]);
+            }
+            for key in host_sim::run::TENDON_ESTIMATE_TENDON_KEYS {
+                assert!(v["tendons"][key].is_null(), "{key}: {}", v["tendons"]);
+            }
+            assert_eq!(numbers(&v["tendons"]["displacements_m"]), [0.05; 3]);
+        }
+        4 => assert_eq!(v["status"]["determination"], "Inconsistent"),
+        other => panic!("exit {other}: {}", v["status"]),
+    }
+    let out = host_sim(&[
+        "estimate",
+        &path,
+        "--displacements=0.05,0.05,0.05",
+        "--tensions-measured=1,1,1",
+        "--tension-std=0.01",
+    ]);
+    if code == 3 {
+        assert!(stdout(&out).starts_with("status: no answer"));
+        assert!(!stdout(&out).contains("tip force ["), "{}", stdout(&out));
+    }
+}
+
+/// `estimate` on a tendon scene refuses bad input with exit 1, naming the key: wrong counts,
+/// non-finite values, deviations not positive, missing displacements or deviations, and the scene's
+/// `[estimate.tendons]` keys.
+#[test]
+fn tendon_estimate_bad_input_is_refused_naming_the_key() {
+    let path = quick_bench("estimate-bad", "");
+    let d = "--displacements=0.001,0.001,-0.001";
+    let t = "--tensions-measured=1,1,1";
+    for (args, key, reason) in [
+        (
+            vec!["--displacements=0.001,0.001"],
+            "--displacements",
+            "2 values for 3 tendons",
+        ),
+        (
+            vec!["--displacements=NaN,0,0"],
+            "--displacements[0]",
+            "finite",
+        ),
+        (
+            vec!["--displacements=0,0.5,0"],
+            "--displacements[1]",
+            "whole length",
+        ),
+        (
+            vec![d, "--tensions-measured=1,1", "--tension-std=0.01"],
+            "--tensions-measured",
+            "2 values for 3 tendons",
+        ),
+        (
+            vec![d, "--tensions-measured=1,NaN,1", "--tension-std=0.01"],
+            "--tensions-measured[1]",
+            "finite",
+        ),
+        (
+            vec![d, t, "--tension-std=-0.01"],
+            "--tension-std",
+            "positive",
+        ),
+        (vec![d, t, "--tension-std=0"], "--tension-std", "positive"),
+        (vec![d, t, "--tension-std=NaN"], "--tension-std", "positive"),
+        (
+            vec![d, t, "--tension-stds=0.01,-0.01,0.01"],
+            "--tension-stds[1]",
+            "positive",
+        ),
+        (
+            vec![d, t, "--tension-stds=0.01,0.01"],
+            "--tension-stds",
+            "2 values for 3 tendons",
+        ),
+        (vec![d, t], "--tensions-measured", "standard deviation"),
+        (
+            vec![d, "--tension-std=0.01"],
+            "--tension-std",
+            "without measured tensions",
+        ),
+        (
+            vec![d, "--cables=0.39,0.39,0.39"],
+            "--cables",
+            "the scene has [[tendon]]",
+        ),
+        (vec![], "actuation.tensions_n", "spool displacements"),
+        (vec![d, "--plot=/tmp/figure.pdf"], "--plot", ".svg or .png"),
+        (
+            vec![d, "--plot=/nonexistent/dir/figure.svg"],
+            "--plot",
+            "no such directory",
+        ),
+    ] {
+        let mut all = vec!["estimate", path.as_str()];
+        all.extend_from_slice(&args);
+        let out = host_sim(&all);
+        let err = stderr(&out);
+        assert_eq!(code(&out), 1, "{args:?}: {err}");
+        assert!(
+            err.contains(&format!("{key}: ")) && err.contains(reason),
+            "{args:?}: {err:?} lacks {key:?} / {reason:?}"
+        );
+    }
+    // The scene's keys.
+    for (name, extra, key, reason) in [
+        (
+            "std-neg",
+            "[estimate.tendons]\ntensions_measured_n = [1.0, 1.0, 1.0]\ntension_std_n = -1.0\n",
+            "estimate.tendons.tension_std_n",
+            "positive",
+        ),
+        (
+            "stds-nan",
+            "[estimate.tendons]\ntensions_measured_n = [1.0, 1.0, 1.0]\ntension_stds_n = [0.1, nan, 0.1]\n",
+            "estimate.tendons.tension_stds_n[1]",
+            "positive",
+        ),
+        (
+            "count",
+            "[estimate.tendons]\ntensions_measured_n = [1.0, 2.0]\n",
+            "estimate.tendons.tensions_measured_n",
+            "2 values for 3 tendons",
+        ),
+        (
+            "both",
+            "[estimate.tendons]\ntension_std_n = 0.1\ntension_stds_n = [0.1, 0.1, 0.1]\n",
+            "estimate.tendons",
+            "not both",
+        ),
+        (
+            "prior",
+            "[estimate.tendons]\nforce_prior_std_n = 0.0\n",
+            "estimate.tendons.force_prior_std_n",
+            "positive",
+        ),
+        (
+            "reach",
+            "[estimate.tendons]\nscan_reach = nan\n",
+            "estimate.tendons.scan_reach",
+            "not below zero",
+        ),
+        (
+            "model",
+            "[estimate.tendons]\nmodel_length_std_m = -1e-6\n",
+            "estimate.tendons.model_length_std_m",
+            "not below zero",
+        ),
+        (
+            "unknown",
+            "[estimate.tendons]\ntension_sd_n = 0.1\n",
+            "line",
+            "unknown field",
+        ),
+        (
+            "resolution",
+            "[estimate]\nresolution_m = -1.0\n",
+            "estimate.resolution_m",
+            "positive",
+        ),
+    ] {
+        let scene = quick_bench(&format!("estimate-bad-{name}"), &format!("\n{extra}"));
+        let out = host_sim(&["estimate", &scene, d]);
+        let err = stderr(&out);
+        assert_eq!(code(&out), 1, "{name}: {err}");
+        assert!(
+            err.contains(key) && err.contains(reason),
+            "{name}: {err:?} lacks {key:?} / {reason:?}"
+        );
+    }
+    // Tendon keys on a scene without tendons; no --cables there is a usage error (exit 2).
+    let cables = scene("bench_3d_cables.toml");
+    for arg in [d, t, "--tension-std=0.01", "--tension-stds=0.01,0.01,0.01"] {
+        let out = host_sim(&["estimate", &cables, arg]);
+        assert_eq!(code(&out), 1, "{arg}");
+        let flag = arg.split('=').next().unwrap_or_default();
+        assert!(
+            stderr(&out).contains(&format!("{flag}: the scene has no [[tendon]]")),
+            "{}",
+            stderr(&out)
+        );
+    }
+    let out = host_sim(&["estimate", &cables]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(stderr(&out).contains("--cables"), "{}", stderr(&out));
+    let out = host_sim(&[
+        "estimate",
+        &path,
+        d,
+        t,
+        "--tension-std=0.1",
+        "--tension-stds=0.1,0.1,0.1",
+    ]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    // [estimate.tendons] without tendons.
+    let text = format!(
+        "{}\n[estimate.tendons]\nscan_reach = 1.0\n",
+        scene_text("bench_3d_cables.toml")
+    );
+    let out = host_sim(&["solve", &write_scene("estimate-no-tendons", &text)]);
+    assert_eq!(code(&out), 1);
+    assert!(
+        stderr(&out).contains("estimate.tendons: the scene has no [[tendon]]"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// The polylines of an SVG drawn in colour `rgb`.
+fn polylines(svg: &str, rgb: (u8, u8, u8)) -> usize {
+    let stroke = format!("stroke=\"#{:02X}{:02X}{:02X}\"", rgb.0, rgb.1, rgb.2);
+    svg.split("<polyline")
+        .skip(1)
+        .filter(|p| p.split("/>").next().is_some_and(|p| p.contains(&stroke)))
+        .count()
+}
+
+/// A fresh, empty directory for figures.
+fn figure_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "host-sim-tendon-plot-{name}-{}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// `--plot` on tendon scenes: SVG and PNG written and not empty; the SVG has one polyline per
+/// taut tendon in each of the three projections and the legend (a slack tendon is dashed: many
+/// short ones); an estimate adds the tip's ellipse in each projection; without an answer nothing
+/// is drawn.
+#[test]
+fn tendon_plots_are_written_for_solve_and_estimate() {
+    let path = quick_bench("plots", "");
+    let dir = figure_dir("tendon");
+    let file = |name: &str| dir.join(name).display().to_string();
+    for name in ["solve.svg", "solve.png"] {
+        let out = host_sim(&["solve", &path, "--plot", &file(name)]);
+        assert_eq!(code(&out), 0, "{}", stderr(&out));
+        assert!(stderr(&out).contains("plot written to"), "{}", stderr(&out));
+        let size = std::fs::metadata(file(name)).map(|m| m.len()).unwrap_or(0);
+        assert!(size > 1000, "{name}: {size} bytes");
+    }
+    let png = std::fs::read(file("solve.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"), "not a PNG");
+    let svg = std::fs::read_to_string(file("solve.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("x (mm)") && svg.contains("z (mm)"));
+    // The scene's tensions 3, 1.5, 0: tendons 0 and 1 taut, 2 slack (dashed).
+    assert_eq!(polylines(&svg, host_sim::plots::tendon_rgb(0)), 3 + 1);
+    assert_eq!(polylines(&svg, host_sim::plots::tendon_rgb(1)), 3 + 1);
+    assert!(polylines(&svg, host_sim::plots::tendon_rgb(2)) > 3 + 1);
+    assert_eq!(polylines(&svg, host_sim::plots::ELLIPSE_RGB), 0);
+
+    // An estimate with tensions measured (no search, for speed): all taut, and the ellipse.
+    let forward = solved(&[&path, "--tensions=2,1,0.5"]);
+    let d = format!(
+        "--displacements={}",
+        list(&numbers(&forward["tendons"]["displacements_m"]))
+    );
+    let quick = quick_bench("plots-estimate", "\n[estimate.tendons]\nscan_reach = 0.0\n");
+    let out = host_sim(&[
+        "estimate",
+        &quick,
+        &d,
+        "--tensions-measured=2,1,0.5",
+        "--tension-std=0.01",
+        "--plot",
+        &file("estimate.svg"),
+    ]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let svg = std::fs::read_to_string(file("estimate.svg")).unwrap();
+    for j in 0..3 {
+        assert_eq!(
+            polylines(&svg, host_sim::plots::tendon_rgb(j)),
+            3 + 1,
+            "tendon {j}"
+        );
+    }
+    assert_eq!(polylines(&svg, host_sim::plots::ELLIPSE_RGB), 3 + 1);
+    assert!(
+        svg.contains("tip ±1σ ellipse") && svg.contains(" ± "),
+        "legend"
+    );
+    assert!(svg.contains("µm") || svg.contains("mm,"), "units");
+
+    // No answer: no file, and standard error says so.
+    let out = host_sim(&[
+        "solve",
+        &path,
+        "--displacements=0.05,0.05,0.05",
+        "--plot",
+        &file("failed.svg"),
+    ]);
+    assert_eq!(code(&out), 3);
+    assert!(stderr(&out).contains("nothing drawn"), "{}", stderr(&out));
+    assert!(!dir.join("failed.svg").exists());
+}
+
+/// `--plot` on a scene without tendons: the backbone, guides and cables, and for an estimate the
+/// ellipse.
+#[test]
+fn tendon_free_scenes_plot_too() {
+    let dir = figure_dir("cables");
+    let svg = dir.join("bench.svg").display().to_string();
+    let bench = scene("bench_3d_cables.toml");
+    let out = host_sim(&["solve", &bench, "--tip-force=0,-0.3,0.1", "--plot", &svg]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("passive cables"), "legend");
+    assert_eq!(polylines(&text, host_sim::plots::tendon_rgb(0)), 0);
+    let png = dir.join("estimate.png").display().to_string();
+    let out = host_sim(&[
+        "estimate",
+        &bench,
+        "--cables",
+        "0.3912,0.3773,0.3825",
+        "--plot",
+        &png,
+    ]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert!(std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0) > 1000);
 }
