@@ -414,7 +414,6 @@ fn tendon_estimate_text(e: &run::TendonEstimateOutput) -> String {
         Some(shape),
         Some(tip),
         Some(tip_sd),
-        Some(rms),
         Some(observable),
         Some(tau),
         Some(tau_sd),
@@ -426,7 +425,6 @@ fn tendon_estimate_text(e: &run::TendonEstimateOutput) -> String {
         &e.shape,
         &e.tip_position_m,
         &e.tip_position_std_m,
-        e.residual_rms_sigma,
         e.force_observable,
         &given.tensions_n,
         &given.tension_std_n,
@@ -487,9 +485,13 @@ fn tendon_estimate_text(e: &run::TendonEstimateOutput) -> String {
         Some(Some(d)) => d.clone(),
         _ => "none".to_string(),
     };
+    let consistency = match e.residual_rms_sigma {
+        Some(rms) => format!("residual rms {rms:.3} sd per spare datum"),
+        None => "no datum to spare: the model is not tested against the data".to_string(),
+    };
     let _ = writeln!(
         t,
-        "determination: {}; tensions: {}; force observable: {}; residual rms {rms:.3} sd",
+        "determination: {}; tensions: {}; force observable: {}; {consistency}",
         verdict(&e.status.determination),
         verdict(&e.status.tension_determination),
         if observable { "yes" } else { "no" }

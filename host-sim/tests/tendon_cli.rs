@@ -853,10 +853,9 @@ fn tendon_estimate_round_trip_through_the_cli() {
     assert_eq!(code, 0, "{}", v["status"]);
     let status = &v["status"];
     assert_eq!(status["verdict"], "answer");
-    assert!(
-        ["Determined", "Weak"].contains(&status["determination"].as_str().unwrap_or_default()),
-        "{status}"
-    );
+    // Three taut tendons and three tensions: no datum to spare, so weak at best.
+    assert_eq!(status["determination"], "Weak", "{status}");
+    assert_eq!(v["consistency_tested"], false);
     assert_eq!(status["tension_determination"], "Determined", "{status}");
     assert_eq!(v["force_observable"], true);
     assert_eq!(v["fit"]["termination"], "Converged");
@@ -888,7 +887,7 @@ fn tendon_estimate_round_trip_through_the_cli() {
             .iter()
             .all(|r| r.abs() < 1e-9)
     );
-    assert!(v["residual_rms_sigma"].as_f64().is_some_and(|r| r < 1.0));
+    assert!(v["residual_rms_sigma"].is_null());
     assert_eq!(v["shape"].as_array().map(Vec::len), Some(41));
     // The settings from [estimate]: the encoder's resolution over sqrt 12.
     let sd = v["settings"]["displacement_std_m"]

@@ -152,8 +152,11 @@ pub struct TendonEstimateOutput {
     /// Its standard deviation, m.
     #[serde(serialize_with = "real::opt_many")]
     pub tip_position_std_m: Option<[f64; 3]>,
-    /// Rms of the whitened data residuals (displacements and measured tensions), standard
-    /// deviations.
+    /// Whether any datum was to spare to test the model against the data (model-core's
+    /// `consistency_tested`); without, the estimate is at best weak and cannot be found inconsistent.
+    pub consistency_tested: Option<bool>,
+    /// Rms of the whitened data residuals (displacements and measured tensions) per spare datum,
+    /// standard deviations (`null` when none is to spare).
     #[serde(serialize_with = "real::opt_one")]
     pub residual_rms_sigma: Option<f64>,
     /// The tendons, given and estimated.
@@ -166,8 +169,9 @@ pub struct TendonEstimateOutput {
 }
 
 /// The top-level keys of [`TendonEstimateOutput`] that are `null` without an answer.
-pub const TENDON_ESTIMATE_KEYS: [&str; 7] = [
+pub const TENDON_ESTIMATE_KEYS: [&str; 8] = [
     "force_observable",
+    "consistency_tested",
     "tip_force_n",
     "tip_force_std_n",
     "tip_position_m",
@@ -253,6 +257,7 @@ impl WithModel for TendonInverse<'_> {
             tip_force_std_n: None,
             tip_position_m: None,
             tip_position_std_m: None,
+            consistency_tested: None,
             residual_rms_sigma: None,
             tendons: TendonEstimateTendons {
                 displacements_m: d.clone(),
@@ -278,7 +283,8 @@ impl WithModel for TendonInverse<'_> {
         out.tip_force_std_n = observable.then(|| arr(&q.force_std_n));
         out.tip_position_m = Some(arr(&est.solved.equilibrium.tip_position_m));
         out.tip_position_std_m = Some(arr(&q.tip_std_m));
-        out.residual_rms_sigma = Some(q.residual_rms_sigma);
+        out.consistency_tested = Some(q.consistency_tested);
+        out.residual_rms_sigma = q.consistency_tested.then_some(q.residual_rms_sigma);
         self.fill_tendons(&mut out.tendons, &tendons, &est);
         let s = self.scene.output_points_m(model.length_m())?;
         let points = tendon_shape(model, &tendons, &est.solved, &s)?;
