@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The accuracy-vs-cost study: report/accuracy_cost.md, .csv and pareto.svg/.png.
+# The accuracy-vs-cost study: report/accuracy_cost.md, .csv, pareto.svg/.png and (the tendon scenes)
+# tendon_pareto.svg/.png.
 #   report/study.sh            the full study, written into report/
 #   report/study.sh --quick    CI's quick mode, written into target/study-quick/
 # Options: --out DIR (where to write). Exits non-zero if a check of the study fails.

@@ -5,7 +5,10 @@
 //! compared with a converged f64 reference: tip, backbone and cable-length errors, deterministic work
 //! (sweeps times RK4 steps) and host wall time. Add `model_core::reduction::choose`'s picks per
 //! tolerance, and the firmware's QEMU instruction counts joined with the host's f32 errors. The
-//! result is `accuracy_cost.md`, `accuracy_cost.csv` and `pareto.svg` / `pareto.png` in `--out`.
+//! tendon scenes (`tendon.rs`) add the tendon models against the discrete guides, displacement
+//! control against tensions, the firmware's tendon counts and `choose_tendons`' picks. The result is
+//! `accuracy_cost.md`, `accuracy_cost.csv`, `pareto.svg` / `pareto.png` and `tendon_pareto.svg` /
+//! `.png` in `--out`.
 //!
 //! micromath is a compile-time feature of model-core, so its rows come from a second build
 //! (`--fast-math-only --rows-out FILE`) merged into the report with `--merge FILE`;
@@ -19,6 +22,7 @@ mod numbers;
 mod pareto;
 mod plot;
 mod reductions;
+mod tendon;
 mod variants;
 mod write;
 
@@ -57,7 +61,8 @@ pub struct Args {
     /// Rows of a --fast-math-only run to merge into the report.
     #[arg(long)]
     merge: Option<PathBuf>,
-    /// Only these scenes (keys: exp2-40.2g, exp2-83.2g, golden); default all.
+    /// Only these scenes (keys: exp2-40.2g, exp2-83.2g, golden, tendon-bench,
+    /// tendon-two-section); default all.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
 }
@@ -129,6 +134,8 @@ pub struct Study {
     pub mcu: mcu::Mcu,
     /// f32 against f64 on the same grid, per scene.
     pub floors: Vec<measure::F32Floor>,
+    /// The tendon scenes (none when `--scenes` names none of them).
+    pub tendon: Option<tendon::TendonStudy>,
     /// Wall time of this run, s.
     pub elapsed_s: f64,
     /// Its checks.
@@ -180,8 +187,16 @@ fn micromath_active() -> bool {
 
 fn scenes(keys: &[String]) -> Result<Vec<StudiedScene>, SceneError> {
     let all = Scene::all()?;
-    if let Some(unknown) = keys.iter().find(|k| !all.iter().any(|s| &s.key == *k)) {
-        let known: Vec<&str> = all.iter().map(|s| s.key.as_str()).collect();
+    let tendon_keys = tendon::keys();
+    if let Some(unknown) = keys
+        .iter()
+        .find(|k| !all.iter().any(|s| &s.key == *k) && !tendon_keys.contains(&k.as_str()))
+    {
+        let known: Vec<&str> = all
+            .iter()
+            .map(|s| s.key.as_str())
+            .chain(tendon_keys)
+            .collect();
         return Err(SceneError::new(
             "--scenes",
             format!("unknown \"{unknown}\" (known: {})", known.join(", ")),
@@ -230,14 +245,14 @@ fn measure_all(
 }
 
 /// Marks each scene's Pareto fronts (work and host time against error) over its converged rows.
-fn mark_fronts(rows: &mut [Row]) {
+pub fn mark_fronts(rows: &mut [Row]) {
     let keys: Vec<String> = rows.iter().map(|r| r.scene.clone()).collect();
     for key in keys.iter() {
         let idx: Vec<usize> = (0..rows.len()).filter(|&i| &rows[i].scene == key).collect();
         let point = |r: &Row, cost: f64| (cost, r.error_m().unwrap_or(f64::NAN));
         let work: Vec<(f64, f64)> = idx
             .iter()
-            .map(|&i| point(&rows[i], rows[i].work_rk4_steps))
+            .map(|&i| point(&rows[i], rows[i].work()))
             .collect();
         let time: Vec<(f64, f64)> = idx
             .iter()
@@ -348,6 +363,9 @@ fn checks(study: &Study, merged: Option<usize>) -> Vec<Check> {
     if let Some(n) = merged {
         check(&mut out, n > 0, format!("{n} micromath rows merged"));
     }
+    if let Some(t) = &study.tendon {
+        out.extend(tendon::checks(t));
+    }
     out
 }
 
@@ -445,6 +463,17 @@ fn run(args: &Args) -> Result<Study, SceneError> {
             floors.push(measure::f32_floor(&s.scene, steps)?);
         }
     }
+    let tendon_keys: Vec<String> = args
+        .scenes
+        .iter()
+        .filter(|k| tendon::keys().contains(&k.as_str()))
+        .cloned()
+        .collect();
+    let tendon = if args.scenes.is_empty() || !tendon_keys.is_empty() {
+        Some(tendon::run(args.quick, &tendon_keys, timing)?)
+    } else {
+        None
+    };
     machine.load_after = read_trimmed("/proc/loadavg");
     let mut study = Study {
         quick: args.quick,
@@ -456,12 +485,16 @@ fn run(args: &Args) -> Result<Study, SceneError> {
         reductions,
         mcu,
         floors,
+        tendon,
         elapsed_s: started.elapsed().as_secs_f64(),
         checks: Vec::new(),
     };
     study.checks = checks(&study, merged);
     write::all(&study, &args.out)?;
     plot::pareto(&study, &args.out)?;
+    if let Some(t) = &study.tendon {
+        tendon::plot(t, &args.out)?;
+    }
     Ok(study)
 }
 

@@ -358,15 +358,21 @@ fn quick_study_writes_its_report_and_every_check_passes() {
         "## Error and cost by variant",
         "## Model only what a scene requires",
         "## Cortex-M4F instruction counts",
+        "## Tendons that pull",
+        "### Conclusions (tendons)",
+        "### From tensions or from displacements",
+        "### Cortex-M4F instruction counts (tendons)",
+        "### `choose_tendons`",
     ] {
         assert!(report.contains(section), "no {section}");
     }
 
     // One CSV line per scene, family and step count: three step counts in quick mode; the planar
-    // reductions only on the in-plane exp-2 scenes.
+    // reductions only on the in-plane exp-2 scenes. Then the two tendon scenes: the discrete guides
+    // (f64, f32) and continuous routing on the three step counts, and PCC (no grid).
     let csv = std::fs::read_to_string(dir.join("accuracy_cost.csv")).expect("csv");
     let lines: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(lines.len(), 3 * (12 + 12 + 8), "{csv}");
+    assert_eq!(lines.len(), 3 * (12 + 12 + 8) + 2 * (3 * 3 + 1), "{csv}");
     let column = |name: &str| {
         csv.lines()
             .next()
@@ -378,15 +384,35 @@ fn quick_study_writes_its_report_and_every_check_passes() {
         column("steps_per_section"),
         column("error_um"),
     );
+    let scene = column("scene");
+    let mut tendon_rows = 0;
     for line in &lines {
         let fields: Vec<&str> = line.split(',').collect();
         if fields[reduction] == "3D" && fields[steps] == "100" && fields[1] == "f64" {
             let e: f64 = fields[error].parse().expect("an error in um");
             assert!(e < 0.01, "f64 3D at 100 steps: {line}");
         }
+        if fields[scene].starts_with("tendon-") {
+            tendon_rows += 1;
+            // The discrete guides converge on the reference; PCC ignores gravity and is cm off.
+            let e: Option<f64> = fields[error].parse().ok();
+            match (fields[reduction], fields[steps], fields[1]) {
+                ("discrete guides", "100", "f64") => {
+                    assert!(e.is_some_and(|e| e < 0.1), "{line}")
+                }
+                ("PCC", _, _) => assert!(e.is_some_and(|e| e > 1e4), "{line}"),
+                _ => {}
+            }
+        }
     }
+    assert_eq!(tendon_rows, 20, "{csv}");
 
-    for (name, min_bytes) in [("pareto.svg", 20_000), ("pareto.png", 50_000)] {
+    for (name, min_bytes) in [
+        ("pareto.svg", 20_000),
+        ("pareto.png", 50_000),
+        ("tendon_pareto.svg", 10_000),
+        ("tendon_pareto.png", 30_000),
+    ] {
         let len = std::fs::metadata(dir.join(name)).map_or(0, |m| m.len());
         assert!(len > min_bytes, "{name}: {len} bytes");
     }

@@ -685,5 +685,15 @@ pub fn conclusions(study: &Study) -> Vec<String> {
     out.extend(mcu(study));
     out.push(reductions(study));
     out.push(fronts(study));
+    if study.tendon.is_some() {
+        out.push(
+            "**Tendons** (the section *Tendons that pull* below, with its own conclusions): the \
+             discrete guides against continuous routing and piecewise constant curvature on the \
+             thesis bench with three tendons and the two-section robot with six, the forward \
+             solve from tensions against displacement control, the firmware's tendon instruction \
+             counts and `choose_tendons`' picks."
+                .into(),
+        );
+    }
     out
 }

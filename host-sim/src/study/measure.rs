@@ -119,6 +119,11 @@ pub struct Row {
     pub backbone_error_m: Option<f64>,
     /// Worst cable length error, m.
     pub cable_error_m: Option<f64>,
+    /// Tendon scenes only: sweeps times RK4 steps per sweep times the relative cost of one step of
+    /// the tendon model (`model_core::tendon_step_cost`, a dead-load 3D step = 100); for PCC, which
+    /// has no grid, `model_core::PCC_COST`. The work the tendon rows' Pareto front is drawn on.
+    #[serde(default)]
+    pub tendon_work: Option<f64>,
     /// On the Pareto front of work against error (set after all rows are in).
     #[serde(default)]
     pub front_work: bool,
@@ -138,6 +143,12 @@ impl Row {
         let errors = [self.tip_error_m, self.backbone_error_m, self.cable_error_m];
         errors.into_iter().flatten().reduce(f64::max)
     }
+
+    /// The work a Pareto front is drawn on: [`Row::tendon_work`] for a tendon row, else
+    /// [`Row::work_rk4_steps`].
+    pub fn work(&self) -> f64 {
+        self.tendon_work.unwrap_or(self.work_rk4_steps)
+    }
 }
 
 fn model_error(what: &'static str) -> impl Fn(ModelError) -> SceneError {
@@ -152,7 +163,8 @@ pub fn arc_lengths_m<T: Scalar>(length_m: T) -> Vec<T> {
         .collect()
 }
 
-fn to_f64<T: Scalar>(v: &Vector3<T>) -> Vector3<f64> {
+/// A vector in f64.
+pub fn to_f64<T: Scalar>(v: &Vector3<T>) -> Vector3<f64> {
     v.map(Scalar::to_f64)
 }
 
@@ -243,14 +255,16 @@ fn solve_reference(scene: &Scene, steps: u16) -> Result<(Vec<CaseReference>, u32
     Ok((cases, sweeps))
 }
 
-fn max_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
+/// The largest distance between corresponding points, m.
+pub fn max_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).norm())
         .fold(0.0, f64::max)
 }
 
-fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+/// The largest difference between corresponding values.
+pub fn max_difference(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
@@ -381,6 +395,7 @@ fn with_frame<T: Scalar, A: Attitude<T>>(
         tip_error_m: error(errors.tip_m),
         backbone_error_m: error(errors.backbone_m),
         cable_error_m: error(errors.cable_m),
+        tendon_work: None,
         front_work: false,
         front_time: false,
     })
@@ -393,6 +408,20 @@ fn time_solves<T: Scalar, A: Attitude<T>>(
     cases: usize,
     timing: Timing,
 ) -> Result<(f64, usize), SceneError> {
+    time_cases(cases, timing, |case| {
+        black_box(solver.solve(black_box(case))?);
+        Ok(())
+    })
+}
+
+/// Median wall time of `run(case)` over the cases, us: every case run once per timed run, the run's
+/// time divided by the case count; at least `timing.min_runs` runs, more while the budget lasts.
+/// Also the number of timed runs.
+pub fn time_cases(
+    cases: usize,
+    timing: Timing,
+    mut run: impl FnMut(usize) -> Result<(), SceneError>,
+) -> Result<(f64, usize), SceneError> {
     let start = Instant::now();
     let mut runs_us = Vec::new();
     while runs_us.len() < timing.min_runs
@@ -400,7 +429,7 @@ fn time_solves<T: Scalar, A: Attitude<T>>(
     {
         let t0 = Instant::now();
         for case in 0..cases {
-            black_box(solver.solve(black_box(case))?);
+            run(black_box(case))?;
         }
         runs_us.push(t0.elapsed().as_secs_f64() * 1e6 / cases.max(1) as f64);
     }

@@ -22,12 +22,13 @@ const LEGEND_HEIGHT: u32 = 80;
 /// Errors are drawn no lower than this, um (an f64 error can be exactly zero).
 const ERROR_FLOOR_UM: f64 = 1e-9;
 
-fn plot_error(e: impl std::fmt::Display) -> SceneError {
+/// A plotting error as a scene error.
+pub(super) fn plot_error(e: impl std::fmt::Display) -> SceneError {
     SceneError::new("pareto plot", e.to_string())
 }
 
-/// The colour of a frame / reduction combination.
-fn colour(family: &Family) -> RGBColor {
+/// The colour of a frame / reduction combination (or tendon model).
+pub(super) fn colour(family: &Family) -> RGBColor {
     match (family.reduction, family.frame) {
         (Reduction::Cosserat3d, Frame::Quaternion) => RGBColor(31, 119, 180),
         (Reduction::Cosserat3d, Frame::RotationMatrix) => RGBColor(255, 127, 14),
@@ -35,6 +36,9 @@ fn colour(family: &Family) -> RGBColor {
         (Reduction::Kirchhoff3d, _) => RGBColor(214, 39, 40),
         (Reduction::Planar, _) => RGBColor(148, 103, 189),
         (Reduction::PlanarKirchhoff, _) => RGBColor(140, 86, 75),
+        (Reduction::TendonDiscrete, _) => RGBColor(31, 119, 180),
+        (Reduction::TendonContinuous, _) => RGBColor(255, 127, 14),
+        (Reduction::TendonPcc, _) => RGBColor(214, 39, 40),
     }
 }
 
@@ -66,7 +70,7 @@ fn kinds() -> [(&'static str, Family); 6] {
 
 /// Which cost a panel plots.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Cost {
+pub(super) enum Cost {
     Work,
     Time,
 }
@@ -74,7 +78,7 @@ enum Cost {
 impl Cost {
     fn of(self, row: &Row) -> f64 {
         match self {
-            Self::Work => row.work_rk4_steps,
+            Self::Work => row.work(),
             Self::Time => row.host_time_us,
         }
     }
@@ -84,10 +88,13 @@ impl Cost {
             Self::Time => row.front_time,
         }
     }
-    fn label(self) -> &'static str {
-        match self {
-            Self::Work => "work: sweeps x RK4 steps per cold solve",
-            Self::Time => "host wall time per cold solve, us (indicative)",
+    fn label(self, tendon: bool) -> &'static str {
+        match (self, tendon) {
+            (Self::Work, false) => "work: sweeps x RK4 steps per cold solve",
+            (Self::Work, true) => {
+                "work: sweeps x RK4 steps x step cost per cold solve (choose_tendons' units)"
+            }
+            (Self::Time, _) => "host wall time per cold solve, us (indicative)",
         }
     }
 }
@@ -113,7 +120,8 @@ fn decades(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo, hi)
 }
 
-fn panel<DB: DrawingBackend>(
+/// One panel: error against `cost` of `rows`, a series per family, the front ringed.
+pub(super) fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     title: &str,
     rows: &[&Row],
@@ -134,7 +142,7 @@ where
         .map_err(plot_error)?;
     chart
         .configure_mesh()
-        .x_desc(cost.label())
+        .x_desc(cost.label(families.iter().any(|f| f.reduction.tendon())))
         .y_desc("error, um")
         .label_style((FONT, 12))
         .axis_desc_style((FONT, 13))

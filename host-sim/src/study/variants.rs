@@ -68,7 +68,8 @@ impl Frame {
     }
 }
 
-/// Which model: the full 3D Cosserat rod or one of `model_core::reduction`'s reductions.
+/// Which model: the full 3D Cosserat rod or one of `model_core::reduction`'s reductions, or, for
+/// the tendon scenes, one of the tendon models (`model_core::TendonModel`, MODEL.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum Reduction {
     /// The full model: 3D, shearable and extensible.
@@ -79,10 +80,16 @@ pub enum Reduction {
     Planar,
     /// The planar reduction of the Kirchhoff rod.
     PlanarKirchhoff,
+    /// Tendons in chords between the guide holes (`Model::solve_tendons`): the tendon reference.
+    TendonDiscrete,
+    /// Tendons routed along the backbone (`Model::solve_tendons_continuous`, Rucker & Webster).
+    TendonContinuous,
+    /// Piecewise constant curvature from the tendons' moments (`Model::solve_tendons_pcc`).
+    TendonPcc,
 }
 
 impl Reduction {
-    /// Every reduction, the full model first.
+    /// Every reduction of the dead-load model, the full model first.
     pub const ALL: [Self; 4] = [
         Self::Cosserat3d,
         Self::Kirchhoff3d,
@@ -117,7 +124,18 @@ impl Reduction {
             Self::Kirchhoff3d => "3D Kirchhoff",
             Self::Planar => "planar",
             Self::PlanarKirchhoff => "planar Kirchhoff",
+            Self::TendonDiscrete => "discrete guides",
+            Self::TendonContinuous => "continuous routing",
+            Self::TendonPcc => "PCC",
         }
+    }
+
+    /// One of the tendon models.
+    pub fn tendon(self) -> bool {
+        matches!(
+            self,
+            Self::TendonDiscrete | Self::TendonContinuous | Self::TendonPcc
+        )
     }
 }
 
@@ -141,9 +159,9 @@ impl Family {
     };
 
     /// A label such as "f32 Lie group 3D" (the frame is left out of the planar reduction's, which
-    /// integrates no frame).
+    /// integrates no frame, and of the tendon models', which the study runs with the quaternion only).
     pub fn label(&self) -> String {
-        if self.reduction.planar() {
+        if self.reduction.planar() || self.reduction.tendon() {
             format!("{} {}", self.arithmetic.label(), self.reduction.label())
         } else {
             format!(

@@ -9,7 +9,8 @@ use super::findings;
 use super::measure::{self, Row};
 use super::numbers::{sig, us};
 use super::reductions::{MAIN_TOLERANCE_M, ReductionCase};
-use super::variants::Family;
+use super::tendon;
+use super::variants::{Family, Reduction};
 use host_sim::scene::SceneError;
 
 fn opt(x: Option<f64>, scale: f64) -> String {
@@ -21,17 +22,17 @@ pub fn csv(rows: &[Row]) -> String {
     let mut out = String::from(
         "scene,precision,math,frame,reduction,steps_per_section,rk4_steps_per_sweep,cases,\
          sweeps_per_solve,work_rk4_steps,host_time_us,timed_runs,termination,tip_error_um,\
-         backbone_error_um,cable_error_um,error_um,pareto_work,pareto_time\n",
+         backbone_error_um,cable_error_um,error_um,pareto_work,pareto_time,tendon_work\n",
     );
     for r in rows {
-        let frame = if r.family.reduction.planar() {
+        let frame = if r.family.reduction.planar() || r.family.reduction == Reduction::TendonPcc {
             "none"
         } else {
             r.family.frame.label()
         };
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{:.3},{:.1},{:.2},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{:.3},{:.1},{:.2},{},{},{},{},{},{},{},{},{}",
             r.scene,
             r.family.arithmetic.precision(),
             r.family.arithmetic.math(),
@@ -51,6 +52,7 @@ pub fn csv(rows: &[Row]) -> String {
             opt(r.error_m(), 1e6),
             r.front_work,
             r.front_time,
+            r.tendon_work.map(|w| format!("{w:.0}")).unwrap_or_default(),
         );
     }
     out
@@ -419,6 +421,9 @@ pub fn markdown(study: &Study) -> String {
     reduction_tables(&mut out, study);
     mcu_table(&mut out, study);
     floor_table(&mut out, study);
+    if let Some(t) = &study.tendon {
+        out.push_str(&tendon::markdown(t));
+    }
     let _ = writeln!(
         out,
         "## Regenerate\n\n\
@@ -440,6 +445,10 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<(), SceneError> {
 pub fn all(study: &Study, dir: &Path) -> Result<(), SceneError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| SceneError::new(dir.display().to_string(), format!("cannot create: {e}")))?;
-    write(dir, "accuracy_cost.csv", &csv(&study.rows))?;
+    let mut rows = study.rows.clone();
+    if let Some(t) = &study.tendon {
+        rows.extend(t.rows.iter().cloned());
+    }
+    write(dir, "accuracy_cost.csv", &csv(&rows))?;
     write(dir, "accuracy_cost.md", &markdown(study))
 }
