@@ -84,7 +84,7 @@ pub enum Reduction {
     TendonDiscrete,
     /// Tendons routed along the backbone (`Model::solve_tendons_continuous`, Rucker & Webster).
     TendonContinuous,
-    /// Piecewise constant curvature from the tendons' moments (`Model::solve_tendons_pcc`).
+    /// Piecewise constant curvature from the tendons' moments (`Model::solve_tendons_pcc_ignoring_loads`: gravity and loads taken as its error).
     TendonPcc,
 }
 

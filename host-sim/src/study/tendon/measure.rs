@@ -169,7 +169,7 @@ impl<T: Scalar> Solver<T> {
         match self.kind {
             TendonModel::DiscreteGuides => m.solve_tendons(set, tau, load, start, s),
             TendonModel::Continuous => m.solve_tendons_continuous(set, tau, load, start, s),
-            TendonModel::ConstantCurvature => m.solve_tendons_pcc(set, tau, load),
+            TendonModel::ConstantCurvature => m.solve_tendons_pcc_ignoring_loads(set, tau, load),
         }
         .map_err(model_error("tendon solve"))
     }

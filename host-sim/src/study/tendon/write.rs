@@ -81,7 +81,7 @@ fn method(out: &mut String, study: &TendonStudy) {
          callgrind counts), PCC its whole closed form ({PCC_COST}).\n\
          - **Variants.** Discrete guides in f64 and f32, continuous routing (Rucker & Webster, \
          `solve_tendons_continuous`) in f64, each on {} steps per section; PCC \
-         (`solve_tendons_pcc`, no grid) in f64. Quaternion frame throughout.\n\
+         (`solve_tendons_pcc_ignoring_loads`: gravity and the tip force taken as its error; no grid) in f64. Quaternion frame throughout.\n\
          - **From tensions or displacements.** At {} steps per section, the discrete guides from \
          tensions (`solve_tendons`) and from the spool displacements the reference equilibrium \
          implies (`solve_displacements`: tensions unknown, complementarity with slack), each cold \
