@@ -78,8 +78,12 @@ run_image() {
     fi
 }
 
-# compare_expected FILE ACTUAL_FILE: the committed expected values must match this run exactly
-# (QEMU with -icount and a pinned toolchain are deterministic); UPDATE_EXPECTED=1 rewrites them.
+# compare_expected FILE ACTUAL_FILE: the committed expected values must match this run: every
+# field exactly except the numbers themselves, each within 0.5 %. QEMU with -icount and a pinned
+# toolchain count the same binary's instructions identically, but the binary depends a little on
+# where the checkout lies: this workspace builds model-core from outside its root, so model-core's
+# symbol hashes carry its path, and the machine outliner's choices follow them (a clone elsewhere
+# measured up to 0.11 % more or fewer instructions, and 8 B of code). UPDATE_EXPECTED=1 rewrites them.
 compare_expected() {
     local expected="$1" actual="$2"
     if [[ "${UPDATE_EXPECTED:-0}" == 1 ]]; then
@@ -91,9 +95,26 @@ compare_expected() {
         echo "$expected is missing: run with UPDATE_EXPECTED=1 and commit it"
         return 1
     fi
-    if ! diff -u "$expected" "$actual"; then
-        echo "$expected differs from this run (UPDATE_EXPECTED=1 rewrites it; review the change)"
+    if ! paste -d '\n' "$expected" "$actual" | awk '
+        # Numbers within 0.5 % of each other; everything else equal.
+        function near(a, b) { return a == b || (a + 0 > 0 && (a - b < 0 ? b - a : a - b) <= 0.005 * a) }
+        NR % 2 == 1 { want = $0; next }
+        {
+            n = split(want, w, /[ =]/); m = split($0, g, /[ =]/)
+            if (n != m) { bad = 1; print "- " want; print "+ " $0; next }
+            for (i = 1; i <= n; i++) {
+                if (w[i] == g[i]) continue
+                if (w[i] ~ /^[0-9]+$/ && g[i] ~ /^[0-9]+$/ && near(w[i], g[i])) continue
+                bad = 1; print "- " want; print "+ " $0; break
+            }
+        }
+        END { exit bad }' || [[ "$(wc -l <"$expected")" != "$(wc -l <"$actual")" ]]; then
+        diff -u "$expected" "$actual"
+        echo "$expected differs from this run beyond 0.5 % (UPDATE_EXPECTED=1 rewrites it; review the change)"
         return 1
+    fi
+    if ! diff -q "$expected" "$actual" >/dev/null; then
+        echo "$expected: this run within 0.5 % of it (the checkout's path moves the counts a little)"
     fi
 }
 
