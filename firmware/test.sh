@@ -118,13 +118,14 @@ compare_expected() {
     fi
 }
 
-# elf_sizes ELF: "flash static_ram" in bytes from the program headers: flash is the span of the
-# loaded segments at flash addresses from the start of flash, static RAM every segment's memory
-# size in RAM.
+# elf_sizes ELF [SKIP]: "flash static_ram" in bytes from the program headers: flash is the span of
+# the loaded segments at flash addresses from the start of flash, static RAM every segment's memory
+# size in RAM. Segments loaded at an address in SKIP (" 0x0801ace0 ...") are left out.
 elf_sizes() {
-    local flash=0 ram=0 type off vaddr paddr filesz memsz rest
+    local flash=0 ram=0 skip="${2:-}" type off vaddr paddr filesz memsz rest
     while read -r type off vaddr paddr filesz memsz rest; do
         [[ "$type" == LOAD ]] || continue
+        [[ "$skip" == *" $(printf '0x%08x' "$paddr") "* ]] && continue
         # Flash is the span the image occupies from the start of flash, alignment gaps between
         # sections included (as the image's own linker symbols count it).
         if ((paddr >= 0x08000000 && paddr < 0x08100000 && paddr + filesz - 0x08000000 > flash)); then
@@ -139,18 +140,12 @@ elf_sizes() {
 # (`.defmt*`), which an image without defmt's linker script (no defmt logger) keeps in flash after
 # everything its own linker symbols delimit (2 B, and the alignment before them).
 flash_without_defmt() {
-    local end=0 markers type off vaddr paddr filesz memsz rest
+    local markers flash ram
     markers=" $(readelf -SW "$1" | awk '{
         for (i = 1; i <= NF; i++) if ($i ~ /^\.defmt/) printf "0x%s ", $(i + 2)
     }')"
-    while read -r type off vaddr paddr filesz memsz rest; do
-        [[ "$type" == LOAD ]] || continue
-        [[ "$markers" == *" $(printf '0x%08x' "$paddr") "* ]] && continue
-        if ((paddr >= 0x08000000 && paddr < 0x08100000 && paddr + filesz - 0x08000000 > end)); then
-            end=$((paddr + filesz - 0x08000000))
-        fi
-    done < <(readelf -lW "$1")
-    echo "$end"
+    read -r flash ram < <(elf_sizes "$1" "$markers")
+    echo "$flash"
 }
 
 # image_budget IMAGE FLASH_BUDGET RAM_BUDGET: the image's flash and RAM (static + the stack's

@@ -2,6 +2,7 @@
 //! discrete-guide model (`tests/data/golden/tendon_*.csv`), the circular arc of the continuous limit,
 //! a published implementation, and physics that must hold (a tendon on the axis only compresses).
 
+use integration_tests::tendon_arc;
 use model_checks::reference::{self, csv_rows};
 use model_core::{
     Model, Rod, Scalar, ShapePoint, ShootingSettings, Stability, Tendon, TendonEquilibrium,
@@ -180,24 +181,6 @@ fn dense<T: Scalar>(guides: usize, steps: u16, tau_n: f64) -> (Vector3<f64>, Vec
     )
 }
 
-/// The circular arc of the continuous limit (Rucker-Webster, exact here): curvature `tau r / E I`
-/// per reference length, stretch `1 - tau / E A`; tip and tendon length.
-fn arc(tau_n: f64) -> (Vector3<f64>, f64) {
-    let (e, d, r, l): (f64, f64, f64, f64) = (54e9, 1.4e-3, 0.01, 0.2);
-    let i = std::f64::consts::PI * d.powi(4) / 64.0;
-    let a = std::f64::consts::PI * d * d / 4.0;
-    let kappa = tau_n * r / (e * i);
-    let stretch = 1.0 - tau_n / (e * a);
-    (
-        Vector3::new(
-            stretch / kappa * (kappa * l).sin(),
-            stretch / kappa * (1.0 - (kappa * l).cos()),
-            0.0,
-        ),
-        l * (stretch - kappa * r),
-    )
-}
-
 #[test]
 fn tendon_dense_guides_match_the_golden_reference_and_its_arc() {
     for row in csv_rows::<16>(reference::TENDON_DENSE_CSV) {
@@ -213,7 +196,7 @@ fn tendon_dense_guides_match_the_golden_reference_and_its_arc() {
             len - v[7]
         );
         // The golden file's arc is this test's arc.
-        let (arc_tip, arc_len) = arc(v[0]);
+        let (arc_tip, _, arc_len) = tendon_arc(v[0]);
         assert!((arc_tip - Vector3::new(v[8], v[9], v[10])).norm() < 1e-11);
         assert!((arc_len - v[14]).abs() < 1e-11);
     }
@@ -226,7 +209,7 @@ fn tendon_dense_guides_match_the_golden_reference_and_its_arc() {
 #[test]
 fn tendon_tip_converges_to_the_circular_arc_as_guides_get_denser() {
     let tau = 2.0;
-    let (arc_tip, arc_len) = arc(tau);
+    let (arc_tip, _, arc_len) = tendon_arc(tau);
     let mut previous = f64::INFINITY;
     for guides in [5, 10, 20, 40, 80] {
         let (tip, _, len) = dense::<f64>(guides, 400, tau);

@@ -2,6 +2,7 @@
 //! Webster) against the circular arc and a published implementation, the discrete guides
 //! approaching it as `1 / K^2`, piecewise constant curvature against both.
 
+use integration_tests::tendon_arc as arc;
 use model_checks::reference;
 use model_core::{
     Model, Rod, Scalar, ShootingSettings, Stability, Tendon, TendonEquilibrium, Tendons, TipLoad,
@@ -28,25 +29,6 @@ fn continuous<T: Scalar>(
     assert!(solved.is_success(), "{:?}", solved.equilibrium.report);
     assert_eq!(solved.equilibrium.report.stability, Stability::Unchecked);
     (model, tendons, solved)
-}
-
-/// The circular arc (golden `tendon_dense_limit.csv` header): curvature `tau r / E I`, stretch
-/// `1 - tau / E A`; tip, tangent and tendon length `L (stretch - kappa r)`.
-fn arc(tau_n: f64) -> (Vector3<f64>, Vector3<f64>, f64) {
-    let (e, d, r, l): (f64, f64, f64, f64) = (54e9, 1.4e-3, 0.01, 0.2);
-    let i = std::f64::consts::PI * d.powi(4) / 64.0;
-    let a = std::f64::consts::PI * d * d / 4.0;
-    let kappa = tau_n * r / (e * i);
-    let stretch = 1.0 - tau_n / (e * a);
-    (
-        Vector3::new(
-            stretch / kappa * (kappa * l).sin(),
-            stretch / kappa * (1.0 - (kappa * l).cos()),
-            0.0,
-        ),
-        Vector3::new((kappa * l).cos(), (kappa * l).sin(), 0.0),
-        l * (stretch - kappa * r),
-    )
 }
 
 fn tendon_continuous_arc<T: Scalar>(steps: u16, tol_m: f64) {

@@ -121,6 +121,23 @@ impl<T: Scalar> Tendons<T> {
         let feed = self.tendons.get(j).map_or(T::zero(), |t| t.feed_length_m);
         feed + self.rest_length_m(j).unwrap_or_else(T::zero)
     }
+
+    /// Checks spool displacements: one per tendon, each finite and less than the tendon's whole
+    /// length (a spool cannot take in more tendon than there is).
+    pub(crate) fn check_displacements(&self, displacements_m: &[T]) -> Result<(), ModelError> {
+        if displacements_m.len() != self.len() {
+            return Err(ModelError::Mismatch("displacements and tendons"));
+        }
+        for (j, d) in displacements_m.iter().enumerate() {
+            finite(*d, "tendon displacement")?;
+            if *d >= self.home_length_m(j) {
+                return Err(ModelError::OutOfRange(
+                    "tendon displacement (more than the tendon's whole length)",
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
@@ -189,28 +206,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         shooting: &ShootingSettings<T>,
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
-        if displacements_m.len() != tendons.len() {
-            return Err(ModelError::Mismatch("displacements and tendons"));
-        }
-        for (j, d) in displacements_m.iter().enumerate() {
-            finite(*d, "tendon displacement")?;
-            let rest = tendons.rest_length_m(j).unwrap_or_else(T::zero);
-            let feed = tendons
-                .tendons
-                .get(j)
-                .map_or(T::zero(), |t| t.feed_length_m);
-            if *d >= rest + feed {
-                return Err(ModelError::OutOfRange(
-                    "tendon displacement (more than the tendon's whole length)",
-                ));
-            }
-        }
+        tendons.check_displacements(displacements_m)?;
         let count = tendons.len();
         let tau_scale = tension_scale_n(self, tendons);
         let radius = tendons
-            .routed
-            .iter()
-            .fold(T::zero(), |r, t| r.max(t.offset_m.norm()))
+            .largest_offset_m()
             .max(self.length_m() * T::lit(1e-3));
 
         // The rounding floor of the residual: a path resolved to a few `eps L`.

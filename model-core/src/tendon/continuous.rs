@@ -97,12 +97,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         s_m: &[T],
         out: &mut [ShapePoint<T>],
     ) -> Result<usize, ModelError> {
-        tendons.check_model(self)?;
-        let tau = tendons.check_tensions(&solved.tensions_n)?;
+        let tau = tendons.check_solved(self, solved)?;
         let eq = &solved.equilibrium;
-        finite_vec(&eq.base_force_n, "base force")?;
-        finite_vec(&eq.base_moment_nm, "base moment")?;
-        eq.load.validate()?;
         let ode = ContinuousTendonRod::new(self, tendons, &tau, &eq.load, T::one());
         let x = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
         if !crate::scalar::all_finite(&x) {

@@ -40,6 +40,22 @@ impl<T: Scalar> TendonEquilibrium<T> {
 }
 
 impl<T: Scalar> Tendons<T> {
+    /// What a shape sweep of `solved` on `model` needs checked: these tendons against the model,
+    /// the tensions, a finite base and a valid tip load. Returns the tensions.
+    pub(super) fn check_solved<A: Attitude<T>, const NODES: usize>(
+        &self,
+        model: &Model<T, A, NODES>,
+        solved: &TendonEquilibrium<T>,
+    ) -> Result<[T; MAX_TENDONS], ModelError> {
+        self.check_model(model)?;
+        let tau = self.check_tensions(&solved.tensions_n)?;
+        let eq = &solved.equilibrium;
+        finite_vec(&eq.base_force_n, "base force")?;
+        finite_vec(&eq.base_moment_nm, "base moment")?;
+        eq.load.validate()?;
+        Ok(tau)
+    }
+
     /// Whether these tendons were checked against a model with `model`'s guides.
     pub(super) fn check_model<A: Attitude<T>, const NODES: usize>(
         &self,
@@ -159,12 +175,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         s_m: &[T],
         out: &mut [ShapePoint<T>],
     ) -> Result<usize, ModelError> {
-        tendons.check_model(self)?;
-        let tau = tendons.check_tensions(&solved.tensions_n)?;
+        let tau = tendons.check_solved(self, solved)?;
         let eq = &solved.equilibrium;
-        finite_vec(&eq.base_force_n, "base force")?;
-        finite_vec(&eq.base_moment_nm, "base moment")?;
-        eq.load.validate()?;
         let ode = TendonRod::new(self, tendons, &tau, &eq.load, T::one());
         let x = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
         shape_of(&ode, &x, s_m, out)

@@ -753,22 +753,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     ) -> Result<TendonEstimate<T>, ModelError> {
         settings.validate()?;
         let count = tendons.len();
-        if displacements_m.len() != count {
-            return Err(ModelError::Mismatch("displacements and tendons"));
-        }
-        for (j, d) in displacements_m.iter().enumerate() {
-            finite(*d, "tendon displacement")?;
-            let rest = tendons.rest_length_m(j).unwrap_or_else(T::zero);
-            let feed = tendons
-                .tendons()
-                .get(j)
-                .map_or(T::zero(), |t| t.feed_length_m);
-            if *d >= rest + feed {
-                return Err(ModelError::OutOfRange(
-                    "tendon displacement (more than the tendon's whole length)",
-                ));
-            }
-        }
+        tendons.check_displacements(displacements_m)?;
         if let Some(m) = measured {
             if m.tensions_n.len() != count || m.std_n.len() != count {
                 return Err(ModelError::Mismatch("measured tensions and tendons"));

@@ -87,6 +87,15 @@ impl<T: Scalar> Tendon<T> {
     pub fn offset_local_m(&self) -> Vector3<T> {
         Vector3::new(self.hole_m.x, self.hole_m.y, T::zero())
     }
+
+    /// The unstretched length of a stretch of this tendon `length_m` long under `tension_n`:
+    /// `l / (1 + tau / E_t A_t)` (the length itself for an inextensible tendon).
+    pub(crate) fn unstretched_m(&self, length_m: T, tension_n: T) -> T {
+        match self.axial_stiffness_n {
+            Some(k) => length_m / (T::one() + tension_n / k),
+            None => length_m,
+        }
+    }
 }
 
 /// Which way a tendon slides through its holes, which sets the sign of the capstan friction: the
@@ -222,6 +231,13 @@ impl<T: Scalar> Tendons<T> {
     pub fn rest_length_m(&self, tendon: usize) -> Option<T> {
         let routed = self.routed.get(tendon)?;
         self.guide_s_m.get(routed.end_guide).copied()
+    }
+
+    /// The largest hole offset of any tendon, m.
+    pub(crate) fn largest_offset_m(&self) -> T {
+        self.routed
+            .iter()
+            .fold(T::zero(), |r, t| r.max(t.offset_m.norm()))
     }
 
     /// Checks tensions: one per tendon, each finite and not negative.

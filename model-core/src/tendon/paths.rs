@@ -37,14 +37,10 @@ pub(crate) fn lengths<T: Scalar>(
     let zero = Vector3::zeros();
     for (j, (r, t)) in tendons.routed.iter().zip(tendons.tendons()).enumerate() {
         let spool = tensions_n.get(j).copied().unwrap_or_else(T::zero);
-        let unstretch = |l: T, tau: T| match t.axial_stiffness_n {
-            Some(k) => l / (T::one() + tau / k),
-            None => l,
-        };
         let mut prev = base_position_m + base_rotation * r.offset_m;
         let mut direction = base_rotation.column(2).into_owned();
         let mut tau = spool;
-        let (mut path, mut unstretched) = (T::zero(), unstretch(t.feed_length_m, spool));
+        let (mut path, mut unstretched) = (T::zero(), t.unstretched_m(t.feed_length_m, spool));
         for guide in guides.get(..=r.end_guide)? {
             let hole = guide.position_m + guide.rotation * r.offset_m;
             let chord = hole - prev;
@@ -55,7 +51,7 @@ pub(crate) fn lengths<T: Scalar>(
                 tau *= (r.capstan_per_rad * theta).exp();
             }
             path += l;
-            unstretched += unstretch(l, tau);
+            unstretched += t.unstretched_m(l, tau);
             prev = hole;
             direction = u;
         }
@@ -76,12 +72,8 @@ pub(crate) fn uniform_unstretched<T: Scalar>(
 ) -> heapless::Vec<T, MAX_TENDONS> {
     let mut out = heapless::Vec::new();
     for ((t, tau), path) in tendons.tendons().iter().zip(tensions_n).zip(path_m) {
-        let spanned = t.feed_length_m + *path;
         // Cannot overflow: at most MAX_TENDONS.
-        let _ = out.push(match t.axial_stiffness_n {
-            Some(k) => spanned / (T::one() + *tau / k),
-            None => spanned,
-        });
+        let _ = out.push(t.unstretched_m(t.feed_length_m + *path, *tau));
     }
     out
 }

@@ -37,10 +37,7 @@ pub(crate) fn tension_scale_n<T: Scalar, A: Attitude<T>, const NODES: usize>(
     model: &Model<T, A, NODES>,
     tendons: &Tendons<T>,
 ) -> T {
-    let radius = tendons
-        .routed
-        .iter()
-        .fold(T::zero(), |r, t| r.max(t.offset_m.norm()));
+    let radius = tendons.largest_offset_m();
     let radius = if radius > T::zero() {
         radius
     } else {
