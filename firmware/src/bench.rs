@@ -14,8 +14,10 @@
 //!   ([`crate::config::COLD_SWEEPS`]) runs out (cable 1 [`BUDGET_SHORTENING_M`] short): its worst
 //!   case,
 //! * `update_warm`: warm `Estimator::update`s along the recorded trajectory's force path with the
-//!   loop's sweep budget (the costliest of [`WARM_TICKS`] ticks is reported, with the worst tip error
-//!   against a forward solve of the same model),
+//!   loop's sweep budget (the costliest of [`WARM_TICKS`] ticks, the whole recording, is reported,
+//!   with the worst tip error against a forward solve of the same model),
+//! * `update_warm_median`: the same updates' median cost (and that update's sweeps), with the
+//!   worst tip error,
 //! * `update_one_sweep`: the same with a budget of one sweep (model-core's hard real-time mode: one
 //!   six-tangent sweep and one Newton step per update).
 //!
@@ -34,13 +36,13 @@ use model_core::{ModelError, ShootingSettings, Start, Termination, TipLoad};
 use nalgebra::Vector3;
 
 use crate::config::loop_config;
-use crate::fixture::REFERENCE;
+use crate::fixture::{REFERENCE, TICK_COUNT};
 
 /// Step counts benchmarked (RK4 steps over the rod's one section).
 pub const STEP_COUNTS: [u16; 5] = [5, 10, 20, 40, 100];
 
 /// Warm updates measured per step count: ticks 1..=WARM_TICKS of the recorded force path.
-pub const WARM_TICKS: usize = 8;
+pub const WARM_TICKS: usize = TICK_COUNT - 1;
 
 /// How much longer every cable reads in `inverse_cold_bad`, m: a stretch no load of the model
 /// explains (the estimate is `Inconsistent`).
@@ -205,8 +207,9 @@ pub fn run(
                 },
             )?;
             let mut worst = Worst::default();
+            let mut costs = [(0u64, 0u16); WARM_TICKS];
             let mut start = Start::Warm(reference.base_strain_per_m);
-            for tick in 1..=WARM_TICKS {
+            for (tick, slot) in (1..=WARM_TICKS).zip(costs.iter_mut()) {
                 let truth = model.solve(&TipLoad::force(force(tick)), start, &settings)?;
                 start = Start::Warm(truth.base_strain_per_m);
                 let measured = lengths(&truth);
@@ -217,6 +220,7 @@ pub fn run(
                 let done = estimate.report.termination == Termination::Converged
                     || (max_sweeps == 1
                         && estimate.report.termination == Termination::IterationLimit);
+                *slot = (cost, estimate.report.sweeps);
                 worst.add(
                     cost,
                     estimate.report.sweeps,
@@ -231,6 +235,18 @@ pub fn run(
                 worst.all_done,
                 worst.tip_error_m,
             ));
+            if case == "update_warm" {
+                // The typical tick: the median cost (and that tick's sweeps).
+                costs.sort_unstable();
+                let (cost, sweeps) = costs.get(WARM_TICKS / 2).copied().unwrap_or_default();
+                report(&line(
+                    "update_warm_median",
+                    cost,
+                    sweeps,
+                    worst.all_done,
+                    worst.tip_error_m,
+                ));
+            }
         }
     }
     tendon_cases(measure, report)
@@ -375,7 +391,7 @@ mod tests {
             },
             &mut |l| lines.push(*l),
         )?;
-        assert_eq!(lines.len(), 7 * STEP_COUNTS.len() + 3);
+        assert_eq!(lines.len(), 8 * STEP_COUNTS.len() + 3);
         for l in &lines {
             println!("{l:?}");
             if !must_converge(l.case) {
@@ -385,9 +401,10 @@ mod tests {
             }
             assert!(l.converged, "{l:?}");
             // The warm path tracks the forward solution to well under the 0.1 mm target; the
-            // one-sweep update, a linear prediction one tick behind, within it.
+            // one-sweep update, a linear prediction one tick behind, lags it by up to 0.17 mm
+            // where the recorded load moves fastest (why the loop does not use it).
             let limit = if l.case == "update_one_sweep" {
-                1e-4
+                2e-4
             } else {
                 5e-5
             };

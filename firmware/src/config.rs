@@ -287,7 +287,7 @@ pub fn loop_config() -> LoopConfig {
         max_cable_speed_m_per_s: MAX_CABLE_SPEED_M_PER_S,
         step_margin_m: STEP_MARGIN_M,
         estimator: EstimatorSettings {
-            max_sweeps: 5,
+            max_sweeps: 6,
             ..EstimatorSettings::with_inverse(InverseSettings {
                 model_length_std_m: MODEL_LENGTH_STD_M,
                 model_tip_std_m: MODEL_TIP_STD_M,

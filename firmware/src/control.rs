@@ -184,7 +184,13 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
         let tick = self.next_tick;
         self.next_tick = self.next_tick.wrapping_add(1);
         let status = match self.validator.check(sample.seq, &sample.readings) {
-            Err(rejection) => Status::Rejected(rejection),
+            Err(rejection) => {
+                // The next update covers two ticks of motion: no predictor from one.
+                if let Some(estimator) = self.estimator.as_mut() {
+                    estimator.forget_motion();
+                }
+                Status::Rejected(rejection)
+            }
             Ok(lengths_m) => {
                 self.validator.accept(sample.seq, lengths_m);
                 self.estimate(tick, &lengths_m)

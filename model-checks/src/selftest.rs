@@ -495,7 +495,10 @@ where
         let (lengths, tip) = lengths_at(k)?;
         let est = ok("update input", estimator.update(&lengths))?;
         holds("update converged", est.report.termination.is_success())?;
-        holds("update within budget", est.report.sweeps <= 3)?;
+        holds(
+            "update within budget",
+            est.report.sweeps <= u16::from(settings.max_sweeps),
+        )?;
         within(
             "tip error, m",
             f64s(&(est.tip_position_m - tip)).norm(),

@@ -533,25 +533,32 @@ fn mcu(study: &Study) -> Option<String> {
             ))
         })
         .collect();
-    let warm: Vec<String> = m
-        .rows
-        .iter()
-        .filter_map(|r| {
-            Some(format!(
-                "{} at {} steps",
-                r.qemu.update_warm_instructions?, r.qemu.steps_per_section
-            ))
-        })
-        .collect();
-    let warm = join(&warm);
+    // A warm-update count per step count, as "N at S steps".
+    let per_steps = |count: fn(&super::mcu::QemuCase) -> Option<u64>| {
+        let listed: Vec<String> = m
+            .rows
+            .iter()
+            .filter_map(|r| {
+                Some(format!(
+                    "{} at {} steps",
+                    count(&r.qemu)?,
+                    r.qemu.steps_per_section
+                ))
+            })
+            .collect();
+        join(&listed)
+    };
+    let warm = per_steps(|q| q.update_warm_instructions);
+    let median = per_steps(|q| q.update_warm_median_instructions);
     Some(format!(
         "**Cortex-M4F** (QEMU instruction counts; errors computed on the host in f32): a plain sweep \
          costs {:.0} instructions per RK4 step. A cold f32 solve of the golden bench at {}; at {}. \
          The f32 error is f32's floor (the f64 model's is under a quarter of it) from {floor_from}. \
          The target of a warm 3D update within {UPDATE_TARGET_INSTRUCTIONS} instructions with the tip \
          within {} mm of the converged f64 answer: the update that converges every tick takes, on its \
-         costliest tick of the bench's path, {warm} (instructions); the one-sweep update (one sweep with \
-         six tangents and one Newton step per tick), with its tip estimated as its worst lag behind \
+         costliest tick of the bench's path, {warm} (instructions), and on its median tick {median}; \
+         the one-sweep update (one Newton step and one sweep with six tangents per tick), with its tip \
+         estimated as its worst lag behind \
          the same model's forward solve on the path plus that model's error at the path's first \
          force: {}.",
         m.instructions_per_step,

@@ -31,8 +31,11 @@ pub struct QemuCase {
     pub converged: bool,
     /// Instructions of a cold inverse estimate (the bench's `inverse_cold`), if recorded.
     pub inverse_cold_instructions: Option<u64>,
-    /// Instructions of a warm estimator update (`update_warm`), if recorded.
+    /// Instructions of the costliest warm estimator update on the bench's path (`update_warm`), if
+    /// recorded.
     pub update_warm_instructions: Option<u64>,
+    /// Instructions of the median warm update on that path (`update_warm_median`), if recorded.
+    pub update_warm_median_instructions: Option<u64>,
     /// Instructions of a one-sweep estimator update (`update_one_sweep`), if recorded.
     pub update_one_sweep_instructions: Option<u64>,
     /// That update's tip distance from the same f32 model's forward solve, m.
@@ -101,6 +104,7 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
                     converged: false,
                     inverse_cold_instructions: None,
                     update_warm_instructions: None,
+                    update_warm_median_instructions: None,
                     update_one_sweep_instructions: None,
                     update_one_sweep_lag_m: None,
                 });
@@ -119,6 +123,9 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
             }
             Some("inverse_cold") => case.inverse_cold_instructions = Some(instructions),
             Some("update_warm") => case.update_warm_instructions = Some(instructions),
+            Some("update_warm_median") => {
+                case.update_warm_median_instructions = Some(instructions);
+            }
             Some("update_one_sweep") => {
                 case.update_one_sweep_instructions = Some(instructions);
                 let lag_nm: f64 = number(&f, "tip_error_nm")?;

@@ -1,6 +1,6 @@
 //! The warm-started inverse for a control loop: one bounded update per tick from the last estimate.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector3};
 
 use super::basis::{LoadBasis, ParamCount, Params};
 use super::quality::Determination;
@@ -14,19 +14,24 @@ use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::plan::MAX_NODES;
 use crate::report::Termination;
-use crate::scalar::product;
 use crate::shape::{MAX_SHAPE_POINTS, Shape, ShapePoint};
 use crate::solve::newton::Work;
 use crate::stability::Stability;
+
+/// The largest load step, in buckling scales (`E I / L^2` of force), taken on a plain sweep (a
+/// chord step): the steps of a tracking update are a few hundredths (the bench's path, 8 mN a
+/// tick: about 0.01); a jump of the data (slack paid out at once) takes Newton steps.
+const CHORD_STEP: f64 = 0.05;
 
 /// Settings of the warm-started [`Estimator`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EstimatorSettings<T> {
     /// The inverse solve's settings, for the first (cold) estimate and every update.
     pub inverse: InverseSettings<T>,
-    /// Most sweeps one update may take (its cost bound). The first is a plain sweep; the others carry
-    /// six tangents and cost about four plain sweeps each. With `1`, every update is exactly one sweep
-    /// with six tangents and one Newton step (see [`Estimator::update`]): the hard real-time mode.
+    /// Most sweeps one update may take (its cost bound): plain sweeps, and sweeps with the six
+    /// tangents (see [`Estimator`]), which cost about four plain ones and count as one. With
+    /// `1`, every update is one Newton step and one sweep with tangents (see [`Estimator::update`]):
+    /// the hard real-time mode.
     pub max_sweeps: u8,
 }
 
@@ -42,7 +47,7 @@ impl<T: Scalar> EstimatorSettings<T> {
     /// to a fraction of the measurement noise, not to rounding, so an update stops when the next step
     /// would move the tip by less than 10 um and the fit by less than 0.01 standard deviations, with
     /// the tip moment to 1e-5 of `E I / L` (a few um at the tip, consistent with the tip tolerance).
-    /// Three sweeps per update at most.
+    /// Five sweeps per update at most (two a typical update, one with tangents).
     pub fn with_inverse(inverse: InverseSettings<T>) -> Self {
         Self {
             inverse: InverseSettings {
@@ -51,20 +56,39 @@ impl<T: Scalar> EstimatorSettings<T> {
                 step_tolerance_sigma: inverse.step_tolerance_sigma.max(T::lit(1e-2)),
                 ..inverse
             },
-            max_sweeps: 3,
+            max_sweeps: 5,
         }
     }
 }
 
 /// The warm-started inverse for a control loop.
 ///
-/// Each [`Estimator::update`] starts from the last estimate: a plain sweep gives the residual for
-/// the new measurements, a step with the Jacobian kept from the last update (a chord step) moves
-/// toward them, and the sweep at the trial point carries the six tangents, so an accepted point
-/// brings its own exact Jacobian: Newton from the second step on, and a fresh Jacobian for the next
-/// update. The cost is bounded by [`EstimatorSettings::max_sweeps`]; when the budget runs out the
-/// report says [`Termination::IterationLimit`] and the next update carries on from there.
-/// Steps are limited by the trust region, so the estimate follows its branch continuously.
+/// Each [`Estimator::update`] starts from the last estimate, whose residual for the new
+/// measurements needs no sweep (the model's cable lengths there are known; only the measurements
+/// moved), and alternates sweeps with the six tangents (about four plain sweeps each) and plain
+/// ones:
+///
+/// 1. The first trial continues the motion of the last two updates (second-order extrapolation of
+///    the base strain and the load), its sweep carrying the tangents: an exact Jacobian where the
+///    answer is near.
+/// 2. Then a Gauss-Newton step of the reduced problem on a plain sweep (a chord step: the
+///    Jacobian of those tangents): usually the last step. Only small steps go on a plain sweep
+///    (0.05 buckling scales); a larger one is a Newton step with its tangents, judged on its own
+///    stability test. The step after a plain one takes the tangents again, so an answer is always
+///    published at most one step from its tangents: its posterior and stability verdict are those
+///    of the Jacobian there (a cold estimate at the same data reports the same standard deviations
+///    within 1.5 %).
+/// 3. A rejected step on tangents taken elsewhere takes them at the last estimate; a step from
+///    tangents taken there, judged on a plain sweep, is tried once more with the trial's own;
+///    judged on tangents at both ends, the update stops (`Stalled`). An update after one that did
+///    not converge (or after a cold estimate that did not) takes every trial with its tangents and
+///    no predictor: the path that converges fast on data no load explains.
+///
+/// On the firmware's recorded path this is two sweeps an update (one with tangents), where Newton
+/// from a chord step took three (two with tangents). The cost is bounded by
+/// [`EstimatorSettings::max_sweeps`]; when the budget runs out the report says
+/// [`Termination::IterationLimit`] and the next update carries on from there. Steps are limited by
+/// the trust region, so the estimate follows its branch continuously.
 #[derive(Clone, Debug)]
 pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize = MAX_NODES>
 {
@@ -79,6 +103,20 @@ pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES:
     /// An update follows one branch from the last estimate and does not look for others, so it
     /// cannot lift the doubt; a new cold start can.
     doubt: Option<Determination>,
+    /// The measurements `lin`'s cable residual refers to.
+    measured: CableVector<T>,
+    /// Steps on plain sweeps since `lin`'s Jacobian came from tangents (0: from tangents at `x`).
+    /// An answer is published at most one such step from its tangents.
+    age: u8,
+    /// Whether the last update failed to converge: this one takes Newton steps (every trial with
+    /// its tangents), as the chord steps did not carry it. Data no load explains (a slack cable)
+    /// is a least-squares problem with a large residual, where only Newton's steps converge fast.
+    newton: bool,
+    /// The last update's move (when it converged or ran out of budget on the way): the next
+    /// update's first trial continues it.
+    velocity: Option<Point<T, P>>,
+    /// The move of the update before it, for the extrapolation's second order.
+    before: Option<Point<T, P>>,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
@@ -152,13 +190,27 @@ where
                 d @ (Determination::Ambiguous | Determination::Unverified) => Some(d),
                 _ => None,
             },
+            measured: CableVector::zeros(),
+            age: u8::MAX,
+            velocity: None,
+            before: None,
+            newton: first.report.termination != Termination::Converged,
         };
         let problem = estimator.problem(validate_measurements(model, measured_m)?);
         let sw = problem.sweep(&estimator.x, true, shape.as_mut().map(Shape::sink).as_mut());
         if sw.finite {
             estimator.lin = problem.linearize(&sw);
         }
+        estimator.measured = problem.measured;
+        estimator.age = if sw.finite { 0 } else { u8::MAX };
         Ok((estimator, first))
+    }
+
+    /// Forgets the last updates' motion, so that the next update takes no predictor: for a caller
+    /// that skipped a tick (refused readings), whose next update covers two ticks of motion, not
+    /// the one the predictor would continue.
+    pub fn forget_motion(&mut self) {
+        (self.velocity, self.before) = (None, None);
     }
 
     /// The current parameters.
@@ -172,22 +224,22 @@ where
 
     /// One estimate for new measurements (one per cable, m), warm-started from the last.
     ///
-    /// With a budget of one sweep ([`EstimatorSettings::max_sweeps`] `= 1`) the update is exactly one
-    /// sweep with six tangents at the last estimate, for the new measurements, and one Newton step
-    /// from it: the cost is fixed, and the estimate returned is the one after the step, its tip and
-    /// cable lengths predicted linearly (the error is second order in the change since the last
-    /// update, and the next update measures it). It reports [`Termination::Converged`] when the
-    /// last estimate already met the tolerances, [`Termination::IterationLimit`] when it took a step.
+    /// With a budget of one sweep ([`EstimatorSettings::max_sweeps`] `= 1`) the update is one
+    /// Gauss-Newton step from the last estimate with the Jacobian of its own sweep, and one sweep
+    /// with the six tangents at the stepped point, which serve the next update: the cost is fixed
+    /// (the hard real-time mode), and the estimate returned is the stepped point as that sweep saw
+    /// it. It reports [`Termination::Converged`] when the last estimate already met the tolerances
+    /// (or the step did), [`Termination::IterationLimit`] when it took a step.
     pub fn update(&mut self, measured_m: &[T]) -> Result<Estimate<T, P>, ModelError> {
-        self.update_inner(measured_m, None)
-            .map(|out| self.with_doubt(out))
+        let out = self.update_inner(measured_m, None)?;
+        Ok(self.settled(out))
     }
 
     /// [`Estimator::update`], and the backbone of the estimate at the arc lengths `s_m` (increasing,
     /// within `[0, L]`, at most [`MAX_SHAPE_POINTS`]) written into `out`, from the update's own
-    /// sweeps: no sweep more. (The one-sweep update's estimate is a linear prediction that no sweep
-    /// has seen: it takes one plain sweep more for its shape, and counts it.) The points are valid
-    /// when the estimate is: on a failed update they belong to the last good estimate.
+    /// sweeps: no sweep more (an update that needs no step takes one plain sweep for them, and
+    /// counts it). The points are valid when the estimate is: on a failed update they belong to the
+    /// last good estimate.
     pub fn update_with_shape(
         &mut self,
         measured_m: &[T],
@@ -195,8 +247,17 @@ where
         out: &mut [ShapePoint<T>],
     ) -> Result<Estimate<T, P>, ModelError> {
         let shape = Shape::new(self.model.length_m(), s_m, out)?;
-        self.update_inner(measured_m, Some(shape))
-            .map(|out| self.with_doubt(out))
+        let out = self.update_inner(measured_m, Some(shape))?;
+        Ok(self.settled(out))
+    }
+
+    /// An update's estimate as returned: the next update takes Newton steps when this one did not
+    /// converge, and the first estimate's doubt carries over.
+    fn settled(&mut self, out: Estimate<T, P>) -> Estimate<T, P> {
+        let termination = out.report.termination;
+        // (One sweep an update takes Newton steps anyway.)
+        self.newton = self.settings.max_sweeps > 1 && termination != Termination::Converged;
+        self.with_doubt(out)
     }
 
     /// An update's estimate with the first estimate's doubt, if any (see [`Estimator`]).
@@ -215,113 +276,169 @@ where
         let problem = self.problem(validate_measurements(self.model, measured_m)?);
         let mut work = Work::default();
         let budget = u16::from(self.settings.max_sweeps);
-        if budget == 1 {
-            let mut out = self.one_step(&problem, work);
-            if let Some(mut shape) = shape {
-                // The stepped point's shape, from one plain sweep at it.
-                out.report.sweeps = out.report.sweeps.saturating_add(1);
-                problem.sweep(&self.x, false, Some(&mut shape.sink()));
-            }
-            return Ok(out);
-        }
-
-        // The residual at the last estimate for the new measurements; the Jacobian is the last one.
-        work.sweeps += 1;
-        let sw = problem.sweep(&self.x, false, shape.as_mut().map(Shape::sink).as_mut());
-        if !sw.finite {
-            return Ok(problem.finish(self.x, &self.lin, Termination::NonFinite, work));
-        }
-        self.lin.set_residual(&sw, problem.cable_residual(&sw));
-        let mut merit = problem.merit(&self.x.p, &self.lin);
-        let mut exact = false;
+        // The residual at the last estimate for the new measurements, without a sweep: the model's
+        // cable lengths there are what they were, only the measurements moved.
+        self.lin.rc += self.measured - problem.measured;
+        self.measured = problem.measured;
+        let start = self.x;
+        // The first trial continues the motion of the last updates (when they converged or ran out
+        // of budget on the way): their last move, plus its change since the one before
+        // (second-order extrapolation). Not with one sweep an update, whose step must read the
+        // new measurements, nor in Newton's steps after a failure.
+        let velocity = self.velocity.take();
+        let before = self.before.take();
+        let mut predictor = velocity
+            .map(|v| match before {
+                Some(b) => Point {
+                    u0: v.u0 * T::lit(2.0) - b.u0,
+                    p: v.p * T::lit(2.0) - b.p,
+                },
+                None => v,
+            })
+            .filter(|v| {
+                budget > 1
+                    && !self.newton
+                    && v.u0.norm() * self.model.length_m()
+                        <= self.settings.inverse.max_rotation_step_rad
+            });
+        let mut red = problem.reduce(&self.lin);
+        let mut current = problem.merit_of(&self.x.p, red.as_ref());
+        // Whether `shape` holds the current point's backbone (written by a sweep of this update).
+        let mut shaped = false;
+        // Whether the last step gained much less than its linear model promised: the Jacobian is
+        // off, and the next trial takes the tangents.
+        let mut tangents_next = false;
+        let mut refresh_next = false;
         let mut scratch = [ShapePoint::default(); MAX_SHAPE_POINTS];
-        loop {
-            let Some(red) = problem.reduce(&self.lin) else {
-                return Ok(self.finish(&problem, Termination::Singular, work));
+        let termination = loop {
+            let Some(reduced) = red.as_ref() else {
+                break Termination::Singular;
             };
-            if problem.converged(&self.x, &self.lin, &red, None).0 {
-                return Ok(self.finish(&problem, Termination::Converged, work));
+            let (done, _, step) = problem.converged_step(&self.x, &self.lin, reduced, None);
+            // An answer is published at most one step from its tangents: the posterior and the
+            // stability verdict read the whole Jacobian, and one taken further away reports other
+            // standard deviations (with Broyden-updated Jacobians between tangents a quarter of a
+            // buckling scale apart: 0.35-2.4 times a cold estimate's; one step from them, within
+            // 1.5 %: `tests/estimator_warm.rs`). A point that passes further from them is tried
+            // again with the tangents.
+            let unproven = done && self.age > 1;
+            let done = done && !unproven;
+            tangents_next |= unproven;
+            if done {
+                if let (false, Some(shape)) = (shaped, shape.as_mut()) {
+                    // Nothing moved enough to sweep: the shape takes one plain sweep.
+                    work.sweeps += 1;
+                    problem.sweep(&self.x, false, Some(&mut shape.sink()));
+                }
+                break Termination::Converged;
             }
-            let Some((du, dp)) = problem.step(&red, &self.x.p, T::zero()) else {
-                return Ok(self.finish(&problem, Termination::Singular, work));
+            // The tangents at the last estimate, taken as a trial of no step (accepted as it is).
+            let refresh = core::mem::take(&mut refresh_next);
+            let predicted = if refresh { None } else { predictor.take() };
+            let Some((du, dp)) = (if refresh {
+                Some((Vector3::zeros(), SVector::zeros()))
+            } else {
+                predicted.map(|v| (v.u0, v.p)).or(step)
+            }) else {
+                break Termination::Singular;
             };
             if work.sweeps >= budget {
-                return Ok(self.finish(&problem, Termination::IterationLimit, work));
+                break Termination::IterationLimit;
             }
-            work.iterations = work.iterations.saturating_add(1);
+            if !refresh {
+                work.iterations = work.iterations.saturating_add(1);
+            }
             work.sweeps += 1;
             let trial = Point {
                 u0: self.x.u0 + du,
                 p: self.x.p + dp,
             };
+            // The tangents on every other sweep: a step from them goes on a plain sweep (a chord
+            // step, its Jacobian that of the last tangents), the step after takes them again, so
+            // the predictor's sweep carries them and the step from it, usually the last, is plain.
+            // With one sweep an update, every trial takes them (they serve the next update). A
+            // large step is a Newton step, judged on its trial's own stability test: a plain
+            // sweep's reads the last tangents, and a step that could cross to another branch
+            // must not be judged there.
+            let large = dp.component_mul(&problem.buckling_weight).norm() > T::lit(CHORD_STEP);
+            let linearise =
+                refresh || budget == 1 || self.newton || self.age >= 1 || tangents_next || large;
             // A trial's shape goes into the scratch buffer, kept only if the trial is.
             let mut trial_shape = shape.as_ref().map(|s| Shape {
                 s_m: s.s_m,
                 out: scratch.get_mut(..s.s_m.len()).unwrap_or(&mut []),
             });
-            let sw = problem.sweep(&trial, true, trial_shape.as_mut().map(Shape::sink).as_mut());
+            let sw = problem.sweep(
+                &trial,
+                linearise,
+                trial_shape.as_mut().map(Shape::sink).as_mut(),
+            );
+            if !sw.finite && refresh {
+                break Termination::NonFinite;
+            }
             if sw.finite {
-                let lin = problem.linearize(&sw);
-                let trial_merit = problem.merit(&trial.p, &lin);
-                if trial_merit < merit && problem.acceptable(&trial.p, &lin) {
-                    (self.x, self.lin, merit, exact) = (trial, lin, trial_merit, true);
-                    self.stability = self.verdict(&problem);
+                let lin = if linearise {
+                    problem.linearize(&sw)
+                } else {
+                    let mut lin = self.lin;
+                    lin.set_residual(&sw, problem.cable_residual(&sw));
+                    lin
+                };
+                let trial_red = problem.reduce(&lin);
+                let trial_merit = problem.merit_of(&trial.p, trial_red.as_ref());
+                if refresh || (trial_merit < current && problem.acceptable(&trial.p, &lin)) {
+                    tangents_next = false;
+                    (self.x, self.lin, red, current) = (trial, lin, trial_red, trial_merit);
+                    self.age = if linearise {
+                        0
+                    } else {
+                        self.age.saturating_add(1)
+                    };
+                    if linearise {
+                        self.stability = self.verdict(&problem);
+                    }
                     if let (Some(shape), Some(trial)) = (shape.as_mut(), trial_shape) {
                         shape.take(trial);
+                        shaped = true;
                     }
                     continue;
                 }
+                if linearise && !self.newton && self.age > 0 {
+                    // The failed trial's tangents, taken next to here, serve here (a chord's).
+                    self.lin.take_jacobian(&lin);
+                    red = problem.reduce(&self.lin);
+                    current = problem.merit_of(&self.x.p, red.as_ref());
+                }
             }
-            // The step failed. With a stale Jacobian, refresh it here once; with an exact one, stop.
-            if exact || work.sweeps >= budget {
-                return Ok(self.finish(&problem, Termination::Stalled, work));
+            // A predictor that missed: a step from here instead. A failed step on tangents taken
+            // elsewhere takes them here. A step from tangents taken here, judged on a plain sweep
+            // (with them, where the tip-moment condition does not hold), is tried once more with
+            // the trial's own; judged on tangents at both ends, the update stops.
+            if predicted.is_some() {
+                continue;
             }
-            work.sweeps += 1;
-            let sw = problem.full_sweep(&self.x);
-            if !sw.finite {
-                return Ok(self.finish(&problem, Termination::NonFinite, work));
+            if self.age == 0 && !linearise && sw.finite && work.sweeps < budget {
+                tangents_next = true;
+                continue;
             }
-            self.lin = problem.linearize(&sw);
-            self.stability = self.verdict(&problem);
-            exact = true;
-        }
-    }
-
-    /// The hard real-time update: one exact linearisation at the last estimate, one Newton step.
-    fn one_step(
-        &mut self,
-        problem: &Problem<'_, T, A, P, NODES>,
-        mut work: Work,
-    ) -> Estimate<T, P> {
-        work.sweeps = 1;
-        let sw = problem.full_sweep(&self.x);
-        if !sw.finite {
-            return problem.finish(self.x, &self.lin, Termination::NonFinite, work);
-        }
-        self.lin = problem.linearize(&sw);
-        self.stability = self.verdict(problem);
-        let Some(red) = problem.reduce(&self.lin) else {
-            return self.finish(problem, Termination::Singular, work);
+            if self.age == 0 || work.sweeps >= budget {
+                break Termination::Stalled;
+            }
+            refresh_next = true;
         };
-        if problem.converged(&self.x, &self.lin, &red, None).0 {
-            return self.finish(problem, Termination::Converged, work);
-        }
-        let Some((du, dp)) = problem.step(&red, &self.x.p, T::zero()) else {
-            return self.finish(problem, Termination::Singular, work);
+        // The move of an update that converged, or ran out of budget on the way, predicts the
+        // next one's.
+        (self.before, self.velocity) = match termination {
+            Termination::Converged | Termination::IterationLimit => (
+                velocity,
+                Some(Point {
+                    u0: self.x.u0 - start.u0,
+                    p: self.x.p - start.p,
+                }),
+            ),
+            _ => (None, None),
         };
-        work.iterations = 1;
-        // The state after the step, predicted by the exact linearisation just taken.
-        let lin = &mut self.lin;
-        lin.e += product(&lin.j_eu, &du) + product(&lin.j_ep, &dp);
-        lin.rc += product(&lin.j_cu, &du) + product(&lin.j_cp, &dp);
-        lin.tip_position_m += product(&lin.d_tip_u, &du) + product(&lin.d_tip_p, &dp);
-        self.x = Point {
-            u0: self.x.u0 + du,
-            p: self.x.p + dp,
-        };
-        let mut out = problem.finish(self.x, &self.lin, Termination::IterationLimit, work);
-        out.report.stability = self.stability;
-        out
+        Ok(self.finish(&problem, termination, work))
     }
 
     fn verdict(&self, problem: &Problem<'_, T, A, P, NODES>) -> Stability<T> {

@@ -15,7 +15,8 @@
 //! force, fewer cables than unknowns, a cable whose length saturates) the estimate says so.
 //!
 //! [`Estimator`] is the warm-started path for a control loop: it keeps the last answer and its
-//! Jacobian, takes chord steps with plain sweeps, and refreshes the Jacobian when a step fails.
+//! Jacobian, and alternates sweeps with tangents and plain sweeps (chord steps), a predictor from its
+//! last moves first.
 
 mod basis;
 mod estimator;

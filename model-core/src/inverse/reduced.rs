@@ -151,6 +151,17 @@ impl<T: Scalar, const P: usize> Linearization<T, P> {
         }
     }
 
+    /// The Jacobian blocks of `other` (tangents taken at a point nearby); the residuals and tip pose
+    /// stay.
+    pub(super) fn take_jacobian(&mut self, other: &Self) {
+        self.j_eu = other.j_eu;
+        self.j_ep = other.j_ep;
+        self.j_cu = other.j_cu;
+        self.j_cp = other.j_cp;
+        self.d_tip_u = other.d_tip_u;
+        self.d_tip_p = other.d_tip_p;
+    }
+
     /// New residuals and tip pose from a plain sweep; the Jacobian blocks stay.
     pub(super) fn set_residual(&mut self, sw: &Sweep<T, 3>, rc: CableVector<T>) {
         self.e = sw.residual;
@@ -173,6 +184,9 @@ pub(super) struct Reduced<T, const P: usize> {
     /// Weighted reduced residual `c~ / s`.
     pub(super) c: CableVector<T>,
 }
+
+/// A change of the unknowns: of the base strain and of the load parameters.
+pub(super) type Move<T, const P: usize> = (Vector3<T>, SVector<T, P>);
 
 /// The state the solve moves: base strain and load parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -359,7 +373,12 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
     /// the step minimises), plus the prior's `|p / prior std|^2`. Judging the full residual instead
     /// would let the moment condition's curvature veto steps along a weakly determined direction.
     pub(super) fn merit(&self, p: &SVector<T, P>, lin: &Linearization<T, P>) -> T {
-        self.reduce(lin).map_or_else(
+        self.merit_of(p, self.reduce(lin).as_ref())
+    }
+
+    /// [`Problem::merit`] from the reduced system at the linearisation (`None`: singular).
+    pub(super) fn merit_of(&self, p: &SVector<T, P>, red: Option<&Reduced<T, P>>) -> T {
+        red.map_or_else(
             || T::max_value().unwrap_or_else(T::one),
             |red| red.c.norm_squared() + self.penalty(p),
         )
@@ -485,9 +504,32 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         red: &Reduced<T, P>,
         previous_tip_move: Option<T>,
     ) -> (bool, T) {
+        let (done, tip_move, _) = self.converged_step(x, lin, red, previous_tip_move);
+        (done, tip_move)
+    }
+
+    /// The fit tolerance of [`Problem::converged`], raised to what the scalar type resolves.
+    pub(super) fn fit_tolerance_sigma(&self) -> T {
+        self.settings
+            .step_tolerance_sigma
+            .max(stopping::fit_floor_sigma(
+                self.model.length_m(),
+                self.length_std_m,
+            ))
+    }
+
+    /// [`Problem::converged`], and the Gauss-Newton step it judged (`None` when singular).
+    #[inline(never)]
+    pub(super) fn converged_step(
+        &self,
+        x: &Point<T, P>,
+        lin: &Linearization<T, P>,
+        red: &Reduced<T, P>,
+        previous_tip_move: Option<T>,
+    ) -> (bool, T, Option<Move<T, P>>) {
         let infinite = T::max_value().unwrap_or_else(T::one);
         let Some((du, dp)) = self.step(red, &x.p, T::zero()) else {
-            return (false, infinite);
+            return (false, infinite, None);
         };
         let tip_move = (product(&lin.d_tip_u, &du) + product(&lin.d_tip_p, &dp)).norm();
         // The tip-moment condition holds when its residual is small or, at the rounding floor, when
@@ -520,14 +562,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             .x
             .max(T::zero())
             .sqrt();
-        let fit_tolerance = self
-            .settings
-            .step_tolerance_sigma
-            .max(stopping::fit_floor_sigma(length, self.length_std_m));
+        let fit_tolerance = self.fit_tolerance_sigma();
         let done = moment_ok
             && tip_move + remaining <= self.settings.tip_tolerance_m.max(tip_floor)
             && fit_move <= fit_tolerance;
-        (done, tip_move)
+        (done, tip_move, Some((du, dp)))
     }
 }
 
