@@ -305,8 +305,8 @@ where
         let mut current = problem.merit_of(&self.x.p, red.as_ref());
         // Whether `shape` holds the current point's backbone (written by a sweep of this update).
         let mut shaped = false;
-        // Whether the last step gained much less than its linear model promised: the Jacobian is
-        // off, and the next trial takes the tangents.
+        // Whether the next trial takes the tangents: a point that would pass the stopping test too
+        // far from them, or a step from them retried on its own.
         let mut tangents_next = false;
         let mut refresh_next = false;
         let mut scratch = [ShapePoint::default(); MAX_SHAPE_POINTS];
