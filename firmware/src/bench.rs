@@ -19,7 +19,7 @@
 //! * `update_warm_median`: the same updates' median cost (and that update's sweeps), with the
 //!   worst tip error,
 //! * `update_one_sweep`: the same with a budget of one sweep (model-core's hard real-time mode: one
-//!   six-tangent sweep and one Newton step per update).
+//!   Newton step and one six-tangent sweep at the stepped point per update).
 //!
 //! And the tendon-driven robot ([`crate::tendon`]) at its loop's step count:
 //! * `tendon_forward_cold`: a cold forward solve from the recorded actuation's first tensions
@@ -401,8 +401,8 @@ mod tests {
             }
             assert!(l.converged, "{l:?}");
             // The warm path tracks the forward solution to well under the 0.1 mm target; the
-            // one-sweep update, a linear prediction one tick behind, lags it by up to 0.17 mm
-            // where the recorded load moves fastest (why the loop does not use it).
+            // one-sweep update, one Newton step a tick, lags it by up to 0.18 mm where the
+            // recorded load moves fastest (why the loop does not use it).
             let limit = if l.case == "update_one_sweep" {
                 2e-4
             } else {

@@ -435,12 +435,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
     /// condition at the current load, and `-J_eu^-1 J_ep dp`, which follows the load step. The trust
     /// region shortens the load step first; shortening the first part too would leave the iterate off
     /// the equilibrium, where the reduced model no longer describes the problem.
-    pub(super) fn step(
-        &self,
-        red: &Reduced<T, P>,
-        p: &SVector<T, P>,
-        mu: T,
-    ) -> Option<(Vector3<T>, SVector<T, P>)> {
+    pub(super) fn step(&self, red: &Reduced<T, P>, p: &SVector<T, P>, mu: T) -> Option<Move<T, P>> {
         let normal = self.information(red);
         let gradient = self.gradient(red, p);
         // A tiny ridge keeps an undetermined direction from blowing the step up; LM damping on top.
@@ -508,18 +503,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
         (done, tip_move)
     }
 
-    /// The fit tolerance of [`Problem::converged`], raised to what the scalar type resolves.
-    pub(super) fn fit_tolerance_sigma(&self) -> T {
-        self.settings
-            .step_tolerance_sigma
-            .max(stopping::fit_floor_sigma(
-                self.model.length_m(),
-                self.length_std_m,
-            ))
-    }
-
     /// [`Problem::converged`], and the Gauss-Newton step it judged (`None` when singular).
-    #[inline(never)]
     pub(super) fn converged_step(
         &self,
         x: &Point<T, P>,
@@ -562,7 +546,10 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             .x
             .max(T::zero())
             .sqrt();
-        let fit_tolerance = self.fit_tolerance_sigma();
+        let fit_tolerance = self
+            .settings
+            .step_tolerance_sigma
+            .max(stopping::fit_floor_sigma(length, self.length_std_m));
         let done = moment_ok
             && tip_move + remaining <= self.settings.tip_tolerance_m.max(tip_floor)
             && fit_move <= fit_tolerance;
