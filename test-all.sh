@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test of the project, with the set-up a fresh machine needs (idempotent, quick when present):
-# the thumbv7em target, Debian's qemu-system-arm for the emulated MCU, a TrueType font for plots, and
-# numpy and scipy for the independent generator of the golden reference.
+# the thumbv7em target, flip-link (the firmware's linker, `cargo install`), Debian's qemu-system-arm
+# for the emulated MCU, a TrueType font for plots, and numpy and scipy for the independent generator
+# of the golden reference.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -30,6 +31,7 @@ python_packages() {
 
 echo "== set-up"
 rustup target add thumbv7em-none-eabihf
+firmware/install-tools.sh
 apt_install qemu-system-arm binutils fonts-dejavu-core
 python_packages
 
@@ -39,8 +41,8 @@ python3 tests/golden/bench_3d_cables.py --check
 echo "== host tests (model-core in f64 and f32, host-sim, cross-crate)"
 cargo test --workspace
 
-echo "== model-core builds without std for the MCU"
-cargo build -p model-core --target thumbv7em-none-eabihf
+echo "== model-core and the live link's record format build without std for the MCU"
+cargo build -p model-core -p robot-link --target thumbv7em-none-eabihf
 
 echo "== firmware (host tests of its library, QEMU images, size budget)"
 firmware/test.sh

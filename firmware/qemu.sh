@@ -7,7 +7,8 @@
 #   ./qemu.sh target/thumbv7em-none-eabihf/release/selftest
 #   CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUNNER="$PWD/qemu.sh" cargo run --release --bin selftest
 #
-# QEMU_TIMEOUT_S (default 120) bounds the run.
+# QEMU_TIMEOUT_S (default 120) bounds the run. QEMU_SERIAL=<file> captures the first serial port
+# (USART1: the e2e image's live link) into that file; without it the port is not connected.
 set -euo pipefail
 
 elf="${1:?usage: qemu.sh <elf>}"
@@ -19,9 +20,13 @@ if ! command -v qemu-system-arm >/dev/null; then
     echo "qemu.sh: qemu-system-arm is not installed (apt-get install -y qemu-system-arm)" >&2
     exit 2
 fi
+serial=none
+if [[ -n "${QEMU_SERIAL:-}" ]]; then
+    serial="file:$QEMU_SERIAL"
+fi
 exec timeout "${QEMU_TIMEOUT_S:-120}" qemu-system-arm \
     -machine netduinoplus2 -cpu cortex-m4 \
-    -nographic -monitor none -serial none \
+    -nographic -monitor none -serial "$serial" \
     -semihosting-config enable=on,target=native \
     -icount shift=3,sleep=off \
     -kernel "$elf"

@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
 # Every firmware check, from any working directory:
 #   formatting, host tests of the library (the fault scenarios listed apart), clippy -D warnings
-#   (host tests and target build), the QEMU images (selftest, golden, e2e, the RTIC estimator image
-#   and its sampling through a cold estimate, bench, and the fault and panic images that must exit
-#   with failure rather than hang), the board image (build only: it needs the real STM32F405's
-#   clock tree), the tendon image (golden tendon rows and a recorded actuation), and the estimator
-#   and tendon images' flash/RAM budgets against the committed expected values in expected/.
+#   (host tests and target build), the QEMU images (selftest, golden, e2e with its live link checked
+#   by host-sim against the f64 reference, the RTIC estimator image
+#   and its sampling through a cold estimate, bench, the fault and panic images that must exit
+#   with failure rather than hang, and the overflow image, whose stack overflow must end in a
+#   reported HardFault with the statics intact), the board image (build only: it needs the real
+#   STM32F405's clock tree), the tendon image (golden tendon rows and a recorded actuation), and the
+#   estimator and tendon images' flash/RAM budgets against the committed expected values in
+#   expected/.
 #
-# Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it installs
-# nothing and says what is missing. Environment:
+# Installs flip-link, the images' linker, when it is missing (install-tools.sh: `cargo install`,
+# pinned). Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it
+# installs none of these and says what is missing. Environment:
+# The live link's check builds host-sim (release) in the repository's root workspace.
 #   UPDATE_EXPECTED=1     rewrite expected/*.size and expected/bench.run from this run
 #   FIRMWARE_BUDGET=report  report an over-budget estimator image without failing
 #   QEMU_TIMEOUT_S=120    bound on each QEMU run
@@ -26,7 +31,11 @@ TENDON_FLASH_BUDGET_B=131072
 TENDON_RAM_BUDGET_B=32768
 
 missing=()
-command -v cargo >/dev/null || missing+=("cargo (the Rust toolchain pinned by ../rust-toolchain.toml)")
+if command -v cargo >/dev/null; then
+    ./install-tools.sh || missing+=("flip-link (./install-tools.sh failed)")
+else
+    missing+=("cargo (the Rust toolchain pinned by ../rust-toolchain.toml)")
+fi
 if command -v rustc >/dev/null && [[ ! -d "$(rustc --print sysroot)/lib/rustlib/$TARGET" ]]; then
     missing+=("the Rust target $TARGET (rustup target add $TARGET)")
 fi
@@ -203,6 +212,57 @@ tendon_budget() {
     image_budget tendon "$TENDON_FLASH_BUDGET_B" "$TENDON_RAM_BUDGET_B"
 }
 
+# The e2e image with its live link captured: QEMU's first serial port (USART1) into $OUT/e2e.link.
+run_e2e() {
+    rm -f "$OUT/e2e.link"
+    QEMU_SERIAL="$OUT/e2e.link" run_image e2e 0 '^e2e: [0-9]+ passed, 0 failed$'
+}
+
+# monitor ARGS...: host-sim monitor, built in the root workspace (whose cargo settings are not the
+# firmware's: run from the root), on paths relative to this directory.
+monitor() {
+    (cd .. && cargo run --release --quiet -p host-sim -- monitor "$@")
+}
+
+# The e2e image's records, decoded and checked by host-sim against the f64 reference the image
+# checks itself against (src/fixture/trajectory.csv): every frame decoded, one record per tick.
+link_check() {
+    monitor --input "firmware/$OUT/e2e.link" --check-against firmware/src/fixture/trajectory.csv \
+        --csv "firmware/$OUT/e2e-link.csv" --quiet >"$OUT/e2e-link.out" 2>&1 || {
+        cat "$OUT/e2e-link.out"
+        return 1
+    }
+    cat "$OUT/e2e-link.out"
+    grep -Eq "^monitor: $TICKS records, 0 frames refused" "$OUT/e2e-link.out"
+}
+
+# The same check on a copy with one byte changed in the middle (never into or out of a 0x00
+# delimiter, which would split a frame or join two): the damaged frame must be refused (one
+# record fewer) and the check must fail.
+link_check_fails() {
+    local at byte status=0
+    at=$(($(wc -c <"$OUT/e2e.link") / 2))
+    byte="$(od -An -tu1 -j "$at" -N1 "$OUT/e2e.link" | tr -d ' ')"
+    if ((byte == 0)); then
+        at=$((at + 1))
+        byte="$(od -An -tu1 -j "$at" -N1 "$OUT/e2e.link" | tr -d ' ')"
+    fi
+    byte=$((byte ^ 0x80))
+    ((byte != 0)) || byte=$((0x40))
+    cp "$OUT/e2e.link" "$OUT/e2e-damaged.link"
+    printf "\\$(printf '%03o' "$byte")" |
+        dd of="$OUT/e2e-damaged.link" bs=1 seek="$at" conv=notrunc status=none
+    monitor --input "firmware/$OUT/e2e-damaged.link" \
+        --check-against firmware/src/fixture/trajectory.csv --quiet \
+        >"$OUT/e2e-damaged.out" 2>&1 || status=$?
+    cat "$OUT/e2e-damaged.out"
+    if [[ "$status" != 1 ]]; then
+        echo "the damaged copy: exit status $status, expected 1 (the check failed)"
+        return 1
+    fi
+    grep -Eq "^monitor: $((TICKS - 1)) records, 1 frames refused" "$OUT/e2e-damaged.out"
+}
+
 bench_expected() {
     grep '^bench ' "$OUT/bench.out" >"$OUT/bench.run"
     cat "$OUT/bench.run"
@@ -214,12 +274,23 @@ check "host tests (cargo test --lib --target $HOST)" cargo test --lib --target "
 check "host fault scenarios (outage, slipped magnet, power-up off home, stuck sensor, slack cable)" \
     cargo test --lib --target "$HOST" scenarios:: -- --nocapture
 check "clippy: host lib and tests" cargo clippy --lib --tests --target "$HOST" -- -D warnings
-check "clippy: target lib and images (with the board image)" \
-    cargo clippy --release --features board --lib --bins -- -D warnings
-check "build the QEMU images (release, $TARGET)" cargo build --release --bins
+check "clippy: target lib and images (with the board image and the live link: the default features)" \
+    cargo clippy --release --lib --bins -- -D warnings
+# Without the default `board` feature: the QEMU images as expected/ records them (the feature changes
+# the library's symbol hashes, and with them the code a little: the estimator image 8 B).
+check "build the QEMU images (release, $TARGET)" cargo build --release --no-default-features --bins
+# The e2e image alone with the live link (`link`): a feature of the library, so that the other
+# images above are built without it, as expected/ records them.
+check "build the e2e image with the live link (release, $TARGET)" \
+    cargo build --release --no-default-features --features link --bin e2e
 check "QEMU selftest: model-core self-checks in f32" run_image selftest 0 '^[0-9]+ passed, 0 failed$'
 check "QEMU golden: golden rows from cable lengths, tip within 0.1 mm" run_image golden 0 '^golden: [0-9]+ passed, 0 failed$'
-check "QEMU e2e: recorded encoder trajectory against the f64 reference" run_image e2e 0 '^e2e: [0-9]+ passed, 0 failed$'
+check "QEMU e2e: recorded encoder trajectory against the f64 reference, a record a tick on USART1" run_e2e
+TICKS="$(sed -n 's/^e2e: \([0-9]*\) recorded ticks.*/\1/p' "$OUT/e2e.out" 2>/dev/null || true)"
+check "live link: host-sim monitor decodes the e2e image's records and checks them against the f64 reference" \
+    link_check
+check "live link: one byte damaged in a copy: that frame refused, one record fewer, the check fails" \
+    link_check_fails
 check "QEMU estimator: RTIC sampler at 1 kHz and the production loop with defmt" \
     run_image estimator 0 '^estimator: [0-9]+ ticks, [0-9]+ fresh, 2 injected faults refused$'
 check "QEMU estimator: the sampler keeps 1 kHz of virtual time through the cold estimate" \
@@ -231,12 +302,16 @@ check "QEMU bench: instruction counts" run_image bench 0 '^bench case=update_war
 check "bench instruction counts match expected/bench.run" bench_expected
 check "QEMU fault: HardFault reports and exits 1" run_image fault 1 '^hard fault: pc'
 check "QEMU panic: panic reports and exits 1" run_image panic 1 'panicked at'
+check "QEMU overflow: a stack overflow is a HardFault at the bottom of RAM, reported, exit 1 (flip-link)" \
+    run_image overflow 1 '^hard fault: stack overflow: sp 0x[0-9a-f]{8} below the stack.s bottom 0x20000000$'
+check "QEMU overflow: the statics above the stack intact" \
+    grep -E '^overflow: [0-9]+ frames deep, the statics intact$' "$OUT/overflow.out"
 check "estimator image within budget, sizes match expected/estimator.size" budget
 check "tendon image within its budget (128 KiB, 32 KiB), sizes match expected/tendon.size" tendon_budget
-# Last: the `board` feature adds stm32f4xx-hal to the library's dependencies, and building it in
-# between would rebuild the QEMU images (which do not use it).
+# The board image needs the `board` feature (a default one), which adds stm32f4xx-hal and
+# panic-probe to the library's dependencies; the QEMU images above are built without it.
 check "build the board image (build only: it needs the real STM32F405's clock tree)" \
-    cargo build --release --features board --bin board
+    cargo build --release --bin board
 
 printf '\n== summary\n'
 printf '%s\n' "${summary[@]}"

@@ -12,8 +12,8 @@
 use model_checks::reference::golden_rows;
 use model_core::{ModelError, Termination};
 
-use crate::config::{BenchModel, SAMPLES_PER_TICK, loop_config};
-use crate::control::{EstimatorLoop, Status, TickRecord};
+use crate::config::{BenchModel, MODEL_NODES, SAMPLES_PER_TICK, loop_config};
+use crate::control::{EstimatorLoop, Status, TickRecord, TickReport};
 use crate::encoder::replay::ReplayError;
 use crate::fixture::{
     JUMP_COUNTS, JUMP_TICK, REFERENCE, RecordedSensor, RecordedSteppers, Reference,
@@ -56,6 +56,12 @@ impl From<SamplerError> for SetupError {
         Self::Sampler(e)
     }
 }
+
+/// The estimator loop over the firmware's robot ([`BenchModel`]).
+pub type BenchLoop<'m> = EstimatorLoop<'m, model_core::Quaternion<f32>, MODEL_NODES>;
+
+/// The loop's report of one tick of the recording.
+pub type ReplayReport = TickReport<SampleError<ReplayError>>;
 
 /// What a tick of the trajectory was expected to do.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -150,16 +156,18 @@ fn errors(record: &TickRecord, reference: &Reference) -> (f64, f64) {
 }
 
 /// Replays the recorded trajectory through the sampler (ten samples a tick, against the recorded
-/// steppers) and the estimator loop on `model`, calling `report` with each tick's verdict. Each tick
-/// takes the sample of its recorded instant. `clock` measures each tick's and each sample's cost (an
-/// instruction counter on the MCU; anything monotonic, or a constant, on the host).
+/// steppers) and the estimator loop on `model`, calling `report` with each tick's verdict, the
+/// loop's own report and the loop as the tick left it (the live link reads its tip frame), after
+/// the tick's cost was measured. Each tick takes the sample of its recorded instant. `clock`
+/// measures each tick's and each sample's cost (an instruction counter on the MCU; anything
+/// monotonic, or a constant, on the host).
 ///
 /// # Errors
 /// [`SetupError`] when the loop or the sampler refuses its configuration.
 pub fn run_trajectory(
     model: &BenchModel,
     clock: &dyn Fn() -> u64,
-    mut report: impl FnMut(&TickCheck),
+    mut report: impl FnMut(&TickCheck, &ReplayReport, &BenchLoop<'_>),
 ) -> Result<Summary, SetupError> {
     let mut estimator = EstimatorLoop::new(model, loop_config())?;
     let mut sampler = crate::config::sampler([0, 1, 2].map(|c| RecordedSensor::new(c, 0)))?;
@@ -237,7 +245,7 @@ pub fn run_trajectory(
             && tip_error_m <= TIP_TOLERANCE_M
             && force_error_n <= FORCE_TOLERANCE_N;
         summary.add(passed, tip_error_m, force_error_n, sweeps);
-        report(&TickCheck {
+        let check = TickCheck {
             tick: out.tick,
             expected,
             status: out.status,
@@ -247,7 +255,8 @@ pub fn run_trajectory(
             sweeps,
             cost,
             passed,
-        });
+        };
+        report(&check, &out, &estimator);
     }
     Ok(summary)
 }
@@ -340,7 +349,7 @@ mod tests {
     fn the_trajectory_passes_on_the_host_in_f32() -> Result<(), SetupError> {
         let model = crate::config::model()?;
         let mut lines = Vec::new();
-        let summary = run_trajectory(&model, &|| 0, |c| lines.push(*c))?;
+        let summary = run_trajectory(&model, &|| 0, |c, _, _| lines.push(*c))?;
         for c in &lines {
             println!("{c:?}");
         }

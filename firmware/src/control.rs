@@ -16,7 +16,7 @@
 use model_core::inverse::{Determination, Estimate, Estimator, EstimatorSettings, LoadBasis};
 use model_core::shape::check_queries;
 use model_core::{Attitude, Model, ModelError, ShapePoint, Termination};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 use crate::sampler::Sample;
 use crate::validate::{CABLES, ReadingValidator, Rejection};
@@ -177,6 +177,15 @@ impl<'m, A: Attitude<f32>, const NODES: usize> EstimatorLoop<'m, A, NODES> {
     /// The newest good estimate.
     pub fn last_estimate(&self) -> Option<&TickRecord> {
         self.last.as_ref()
+    }
+
+    /// The tip frame at the estimator's current point (columns: the tip's axes in global
+    /// coordinates): that of the estimate a tick just published when its status is
+    /// [`Status::Fresh`] (after any other status it may be a failed update's). `None` before the first estimate and after a
+    /// restart. Not part of [`TickRecord`], so that the loop's own output stays as small as it was;
+    /// the live link reads it after each fresh tick.
+    pub fn tip_rotation(&self) -> Option<Matrix3<f32>> {
+        self.estimator.as_ref().map(Estimator::tip_rotation)
     }
 
     /// One control tick on the sampler's latest sample (one length per cable, m, or why not).

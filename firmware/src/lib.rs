@@ -12,6 +12,7 @@
 //! | spool calibration (counts <-> metres) | [`spool`] |
 //! | reading validation (typed rejections) | [`validate`] |
 //! | the estimator loop and its output records | [`control`] |
+//! | the live link: each tick's record over a UART (`robot-link`'s frames; feature `link`) | `link` |
 //! | the composition root: the robot (rod, model), spools, loop settings | [`config`] |
 //! | the recorded trajectory and its f64 reference | [`fixture`] |
 //! | end-to-end and golden checks run by the images | [`checks`] |
@@ -26,6 +27,8 @@ pub mod config;
 pub mod control;
 pub mod encoder;
 pub mod fixture;
+#[cfg(any(test, feature = "link"))]
+pub mod link;
 pub mod sampler;
 pub mod spool;
 pub mod stepper;

@@ -5,6 +5,25 @@
 //! Gauss-Newton on `log E` (and `log density scale`) with a forward-difference Jacobian; each residual
 //! evaluation solves every row (warm-started along the table). The standard deviation of the fit comes
 //! from the residual variance and the Jacobian at the optimum.
+//!
+//! This file fits the thesis's tables (`host-sim calibrate --table`). The submodules fit a scene to
+//! the user's own measurements (`host-sim calibrate <scene.toml> --data <measurements.csv>`): the
+//! data format ([`data`]), the fitted parameters ([`params`], [`pose`]), the forward model
+//! ([`forward`]), Levenberg-Marquardt ([`lm`]), the uncertainty and what the data do not determine
+//! ([`uncertainty`]), the fit with its residuals and leave-one-out ([`fit`]), the calibrated scene
+//! ([`write`]), the report ([`text`]) and the command ([`command`]).
+
+pub mod command;
+pub mod data;
+pub mod figure;
+pub mod fit;
+pub mod forward;
+pub mod lm;
+pub mod params;
+pub mod pose;
+pub mod text;
+pub mod uncertainty;
+pub mod write;
 
 use model_checks::reference::{self, csv_rows};
 use model_core::{Model, PointLoad, Rod, ShapePoint, Start, TipLoad};

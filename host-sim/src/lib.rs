@@ -3,6 +3,7 @@
 //! so tests assert on the same numbers.
 
 pub mod calibrate;
+pub mod monitor;
 pub mod plots;
 pub mod report;
 pub mod run;

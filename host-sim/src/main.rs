@@ -2,13 +2,13 @@
 
 use std::fmt::Write as _;
 use std::io::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
-use host_sim::plots::Figure;
+use host_sim::plots::{Figure, PlotSize};
 use host_sim::run::{self, Estimate, Solve, Status, TendonInverse, TendonSolve, exit, with_model};
-use host_sim::scene::{Actuation, Control, Scene, SceneError, TensionArgs};
+use host_sim::scene::{self, Actuation, Control, Scene, SceneError, TensionArgs};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
 
@@ -65,6 +65,9 @@ tendons dashed when slack, an estimate's tip 1-sigma ellipse; nothing drawn with
 #[command(
     version,
     about = "Cosserat-rod shape model of a cable-driven continuum robot, in f64 on the host",
+    long_about = "Cosserat-rod shape model of a cable-driven continuum robot, in f64 on the host.\n\n\
+                  A scene file (TOML) describes one robot: host-sim/SCENES.md documents every key, \
+                  with its unit, default and valid range, and has complete example scenes.",
     after_help = EXIT_STATUS
 )]
 struct Cli {
@@ -94,14 +97,46 @@ enum Command {
     /// The inverse on Table 4.5: the hung mass and the tip from the single measured cable, with the
     /// uncertainty of the bench's 1 mm ruler, against the hung mass and the observed tip.
     Inverse,
-    /// Fit Young's modulus (and optionally the line density) to a thesis table by least squares, with
-    /// leave-one-out errors.
+    /// Fit Young's modulus and other parameters by least squares, with leave-one-out errors: to a
+    /// thesis table, or a scene to your own measured points.
+    ///
+    /// With --table (the default, 4.3): the thesis's table. With SCENE --data FILE.csv: the scene
+    /// fitted to the measured points, with the parameters' standard deviations, the residual of
+    /// every point, leave-one-out per experiment and a verdict; exits 0 when the data determine
+    /// every fitted parameter, 3 when they do not (the undetermined combination is named and no
+    /// number is printed for it) or the fit fails, 1 for invalid input.
+    #[command(after_help = calibrate::data::DATA_HELP)]
     Calibrate {
+        /// The scene file (TOML) of the robot measured; with --data.
+        #[arg(requires = "data")]
+        scene: Option<PathBuf>,
+        /// The measurements (CSV, format below and in host-sim/SCENES.md "Calibration data").
+        #[arg(long, requires = "scene")]
+        data: Option<PathBuf>,
+        /// With a scene: what to fit besides E (always fitted), comma-separated: E, line_density,
+        /// cable_offset (tendon scenes: a scale on every hole's radius), base_pose (rotation and
+        /// translation of the measurement frame), friction (tendon scenes).
+        #[arg(long, value_enum, value_delimiter = ',', requires = "scene")]
+        fit: Vec<calibrate::params::FitParameter>,
+        /// With a scene: write the calibrated scene here (the scene file with the fitted values in
+        /// its keys, comments and layout kept); only when every fitted parameter is determined.
+        #[arg(long, requires = "scene")]
+        out: Option<PathBuf>,
+        /// With a scene: the report's format.
+        #[arg(long, value_enum, default_value_t = calibrate::command::ReportFormat::Text)]
+        format: calibrate::command::ReportFormat,
+        /// With a scene: also draw each experiment's backbone at the fitted values and the
+        /// observed points (measurement frame) into this file, SVG or PNG by its extension.
+        #[arg(long, requires = "scene")]
+        plot: Option<PathBuf>,
+        /// The figure's printed width: "column" (3.5 in) or "page" (7.16 in).
+        #[arg(long, value_enum, default_value_t = PlotSize::Page)]
+        plot_size: PlotSize,
         /// Which table: "4.1" (two sections) or "4.3" (guides, average mass).
-        #[arg(long, default_value = "4.3")]
+        #[arg(long, default_value = "4.3", conflicts_with = "scene")]
         table: String,
-        /// Also fit a scale on the line density.
-        #[arg(long)]
+        /// Also fit a scale on the line density (a thesis table).
+        #[arg(long, conflicts_with = "scene")]
         fit_density: bool,
     },
     /// Solve a scene: the shape and the cable lengths under its tip load; with tendons, also their
@@ -143,6 +178,11 @@ enum Command {
         /// answer.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// The figure's printed width: "column" (3.5 in, one column of a two-column paper) or
+        /// "page" (7.16 in, both columns). Fonts and lines keep their sizes in points; a PNG is
+        /// 300 dpi.
+        #[arg(long, value_enum, default_value_t = PlotSize::Page)]
+        plot_size: PlotSize,
     },
     /// Estimate the tip force of a scene's robot: from measured cable lengths (--cables), or for a
     /// scene with tendons, the tensions, the tip force and the shape from the spool displacements
@@ -185,11 +225,21 @@ enum Command {
         /// deviation along each axis). Not drawn without an answer.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// The figure's printed width: "column" (3.5 in, one column of a two-column paper) or
+        /// "page" (7.16 in, both columns). Fonts and lines keep their sizes in points; a PNG is
+        /// 300 dpi.
+        #[arg(long, value_enum, default_value_t = PlotSize::Page)]
+        plot_size: PlotSize,
     },
     /// The accuracy-vs-cost study of the model's variants (f64/f32, frames, reductions, steps):
     /// report/accuracy_cost.md, .csv and the Pareto plot. `report/study.sh` adds the micromath rows.
     /// Exits non-zero if a check fails.
     Study(study::Args),
+    /// Read the live link (the firmware's records, link/FORMAT.md) from a serial port, a file, a
+    /// FIFO or standard input: one line per record, --csv, --plot of the latest shape, and
+    /// --check-against a reference. Exits 1 when a check fails.
+    #[command(after_help = host_sim::monitor::MONITOR_HELP)]
+    Monitor(host_sim::monitor::Args),
 }
 
 fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
@@ -501,13 +551,17 @@ fn tendon_estimate_text(e: &run::TendonEstimateOutput) -> String {
 }
 
 /// Draws `figure` into `path` when asked; says on standard error what became of it.
-fn draw_plot(path: Option<&PathBuf>, figure: Option<&Figure>) -> Result<(), SceneError> {
+fn draw_plot(
+    path: Option<&PathBuf>,
+    size: PlotSize,
+    figure: Option<&Figure>,
+) -> Result<(), SceneError> {
     let Some(path) = path else {
         return Ok(());
     };
     match figure {
         Some(f) => {
-            host_sim::plots::draw_figure(f, path)?;
+            host_sim::plots::draw_figure(f, path, size)?;
             eprintln!("plot written to {}", path.display());
         }
         None => eprintln!(
@@ -535,7 +589,7 @@ fn estimate_tendons(
     tensions: TensionArgs,
     format: Format,
     out: Option<PathBuf>,
-    plot: Option<PathBuf>,
+    (plot, plot_size): (Option<PathBuf>, PlotSize),
 ) -> Result<u8, SceneError> {
     let given = displacements.map(|values| Actuation {
         control: Control::Displacements,
@@ -580,14 +634,39 @@ fn estimate_tendons(
         Format::Csv => run::tendon_estimate_csv(&estimate),
     };
     emit(&text, out.as_ref())?;
-    draw_plot(plot.as_ref(), estimate.figure.as_ref())?;
+    draw_plot(plot.as_ref(), plot_size, estimate.figure.as_ref())?;
     Ok(estimate.status.exit_code)
+}
+
+/// Reads and parses the scene at `path`, and prints its warnings (unusual values, each at its line).
+fn open_scene(path: &Path) -> Result<Scene, SceneError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(&origin, format!("cannot read: {e}")))?;
+    let scene = Scene::parse(&text, &origin)?;
+    for w in scene.warnings() {
+        eprintln!("warning: {}", scene::locate(w, &text, &origin));
+    }
+    Ok(scene)
+}
+
+/// `error` at its line in the scene file `path`, when it names one of the file's keys.
+fn in_scene(error: SceneError, path: Option<&Path>) -> SceneError {
+    match path.and_then(|p| Some((std::fs::read_to_string(p).ok()?, p.display().to_string()))) {
+        Some((text, origin)) => scene::locate(error, &text, &origin),
+        None => error,
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let scene_file = match &cli.command {
+        Command::Solve { scene, .. } | Command::Estimate { scene, .. } => Some(scene.clone()),
+        _ => None,
+    };
     let result = match cli.command {
         Command::Study(args) => return study::main(&args),
+        Command::Monitor(args) => return host_sim::monitor::main(&args),
         Command::Validate { plots } => match thesis::validate() {
             Ok(v) => {
                 print!("{}", report::validation(&v));
@@ -614,7 +693,26 @@ fn main() -> ExitCode {
             }
             Ok(exit::ANSWER)
         })(),
-        Command::Calibrate { table, fit_density } => (|| {
+        Command::Calibrate {
+            scene: Some(scene),
+            data: Some(data),
+            fit,
+            out,
+            format,
+            plot,
+            plot_size,
+            ..
+        } => calibrate::command::run(&calibrate::command::Args {
+            scene,
+            data,
+            fit,
+            out,
+            format,
+            plot: plot.map(|p| (p, plot_size)),
+        }),
+        Command::Calibrate {
+            table, fit_density, ..
+        } => (|| {
             let dataset = match table.as_str() {
                 "4.1" => calibrate::Dataset::Table41,
                 "4.3" => calibrate::Dataset::Table43,
@@ -642,8 +740,9 @@ fn main() -> ExitCode {
             format,
             out,
             plot,
+            plot_size,
         } => (|| {
-            let scene = Scene::load(&scene)?;
+            let scene = open_scene(&scene)?;
             check_plot(plot.as_ref())?;
             let mut load = scene.tip_load()?;
             if let Some(f) = tip_force {
@@ -691,7 +790,7 @@ fn main() -> ExitCode {
                 Format::Csv => run::solution_csv(&solution),
             };
             emit(&text, out.as_ref())?;
-            draw_plot(plot.as_ref(), solution.figure.as_ref())?;
+            draw_plot(plot.as_ref(), plot_size, solution.figure.as_ref())?;
             Ok(solution.status.exit_code)
         })(),
         Command::Estimate {
@@ -704,8 +803,9 @@ fn main() -> ExitCode {
             format,
             out,
             plot,
+            plot_size,
         } => (|| {
-            let scene = Scene::load(&scene)?;
+            let scene = open_scene(&scene)?;
             check_plot(plot.as_ref())?;
             if !scene.tendons.is_empty() {
                 if cables.is_some() {
@@ -722,7 +822,14 @@ fn main() -> ExitCode {
                     std_n: tension_std,
                     stds_n: tension_stds,
                 };
-                return estimate_tendons(&scene, displacements, tensions, format, out, plot);
+                return estimate_tendons(
+                    &scene,
+                    displacements,
+                    tensions,
+                    format,
+                    out,
+                    (plot, plot_size),
+                );
             }
             for (given, key) in [
                 (displacements.is_some(), "--displacements"),
@@ -767,12 +874,12 @@ fn main() -> ExitCode {
                 Format::Csv => run::shape_csv(shape, &estimate.status),
             };
             emit(&text, out.as_ref())?;
-            draw_plot(plot.as_ref(), estimate.figure.as_ref())?;
+            draw_plot(plot.as_ref(), plot_size, estimate.figure.as_ref())?;
             Ok(estimate.status.exit_code)
         })(),
     };
     match result {
         Ok(code) => ExitCode::from(code),
-        Err(e) => fail(&e),
+        Err(e) => fail(&in_scene(e, scene_file.as_deref())),
     }
 }

@@ -1,7 +1,8 @@
 //! Scene files (TOML): the rod and its sections, guides, cables, tendons and their actuation, loads,
 //! gravity, output points, solver and estimator settings. Keys carry their units; unknown keys are
 //! refused, so a typo is an error and not a silently ignored setting. `host-sim/SCENES.md` documents
-//! the tendon keys.
+//! every key. Every refusal names its line (`scene/locate.rs`), and numbers no robot has are
+//! refused or warned about with the likely unit slip (`scene/plausible.rs`).
 //!
 //! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`], its tendons a
 //! [`model_core::Tendons`] checked against the model through [`Scene::tendon_set`], their actuation
@@ -24,6 +25,11 @@ use model_core::{
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
+
+mod locate;
+mod plausible;
+
+pub use locate::locate;
 
 /// Most output points (`output.points`, or the length of `output.s_m`): far more than a plot or a
 /// comparison needs, and small enough that the shape (about 100 bytes a point, more as JSON) stays
@@ -542,8 +548,8 @@ pub struct EstimateSpec {
     /// A force component with a larger standard deviation makes the estimate "weak", N.
     #[serde(default = "default_max_force_std")]
     pub max_force_std_n: f64,
-    /// The tendon inverse's own settings and measured tensions (`[estimate.tendons]`,
-    /// host-sim/SCENES.md); only for a scene with `[[tendon]]`.
+    /// The tendon inverse's own settings and measured tensions (`[estimate.tendons]`); only for a
+    /// scene with `[[tendon]]`.
     #[serde(default)]
     pub tendons: Option<TendonEstimateSpec>,
 }
@@ -616,27 +622,18 @@ fn finite(field: &str, x: f64) -> Result<f64, SceneError> {
 impl Scene {
     /// Parses a scene from TOML text; `origin` names it in errors. Checks every size (see the
     /// module's documentation) before returning.
+    ///
+    /// Refuses the values the rod model cannot mean (`plausible.rs`: a modulus below 1 MPa, a
+    /// diameter half the rod's length), naming the likely unit slip; [`Scene::warnings`] lists the
+    /// merely unusual ones. Every error names its line in `text` ([`locate`]).
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
-        let scene = Self::parse_unchecked(text, origin)?;
-        scene.check_sizes()?;
+        let scene: Self =
+            toml::from_str(text).map_err(|e| locate::explain_parse(&e, text, origin))?;
+        scene
+            .check_sizes()
+            .and_then(|()| scene.check_plausible())
+            .map_err(|e| locate(e, text, origin))?;
         Ok(scene)
-    }
-
-    fn parse_unchecked(text: &str, origin: &str) -> Result<Self, SceneError> {
-        toml::from_str(text).map_err(|e| {
-            let message = e.message().to_string();
-            // Name the place by line number and by the line itself, which shows the key.
-            let place = e
-                .span()
-                .map(|span| {
-                    let before = text.get(..span.start).unwrap_or("");
-                    let line = before.matches('\n').count() + 1;
-                    let content = text.lines().nth(line - 1).unwrap_or("").trim();
-                    format!("{origin}, line {line} (`{content}`)")
-                })
-                .unwrap_or_else(|| origin.to_string());
-            SceneError::new(place, message)
-        })
     }
 
     /// Every count and size the scene expands into vectors or work, against its limit: the sections
@@ -686,10 +683,17 @@ impl Scene {
                 ));
             }
             (None, None) => {
+                let only_sliding = if a.sliding.is_some() {
+                    " (sliding alone says which way they move, not how far or how hard)"
+                } else {
+                    ""
+                };
                 return Err(SceneError::new(
                     "actuation",
-                    "give tensions_n (force control) or displacements_m (displacement control), \
-                     one entry per [[tendon]]",
+                    format!(
+                        "give tensions_n (force control) or displacements_m (displacement \
+                         control), one entry per [[tendon]]{only_sliding}"
+                    ),
                 ));
             }
         };
@@ -1261,6 +1265,16 @@ impl Scene {
         }
         for (i, c) in self.cables.iter().enumerate() {
             let field = format!("cable[{i}]");
+            if c.radius_m < 0.0 {
+                return Err(SceneError::new(
+                    format!("{field}.radius_m"),
+                    format!(
+                        "{} m: a hole's distance from the backbone is not negative (to put it on \
+                         the other side, add 180 to angle_deg)",
+                        c.radius_m
+                    ),
+                ));
+            }
             rod.push_cable(Cable::at_angle(
                 finite(&format!("{field}.angle_deg"), c.angle_deg)?.to_radians(),
                 finite(&format!("{field}.radius_m"), c.radius_m)?,
@@ -1362,6 +1376,15 @@ impl SectionSpec {
                         ));
                     }
                 };
+                if !(c.inner_diameter_m.is_finite() && c.inner_diameter_m >= 0.0) {
+                    return Err(SceneError::new(
+                        format!("{field}.cross_section.inner_diameter_m"),
+                        format!(
+                            "{}: must be a number not below zero (0, the default, is a solid rod)",
+                            c.inner_diameter_m
+                        ),
+                    ));
+                }
                 let section = if c.inner_diameter_m > 0.0 {
                     CrossSection::tube(c.diameter_m, c.inner_diameter_m)
                 } else {
@@ -1404,8 +1427,13 @@ impl SectionSpec {
             }
         };
         if !(line_density_kg_per_m.is_finite() && line_density_kg_per_m >= 0.0) {
+            let key = if self.density_kg_m3.is_some() {
+                "density_kg_m3"
+            } else {
+                "line_density_kg_per_m"
+            };
             return Err(SceneError::new(
-                format!("{field}.line_density_kg_per_m"),
+                format!("{field}.{key}"),
                 "must be a non-negative number",
             ));
         }
@@ -1476,7 +1504,7 @@ impl Guides {
             .enumerate()
             .map(|(i, (&s, (&thickness_m, &mass_kg)))| {
                 Ok(Guide {
-                    s_m: finite(&format!("guides.centres[{i}]"), s)?,
+                    s_m: finite(&format!("guides.centres_m[{i}]"), s)?,
                     thickness_m,
                     mass_kg,
                 })

@@ -246,8 +246,16 @@ fn bad_scene(name: &str, text: &str) -> String {
 fn bad_scenes_name_the_field_and_the_reason() {
     let good = std::fs::read_to_string(scene("thesis_exp2_average.toml")).unwrap();
     let err = bad_scene("neg", &good.replace("length_m = 0.39", "length_m = -0.39"));
+    // Found when the rod is built, after parsing: still at its line.
+    let line = good
+        .lines()
+        .position(|l| l.contains("length_m = 0.39"))
+        .unwrap()
+        + 1;
     assert!(
-        err.contains("section[0].length_m") && err.contains("positive"),
+        err.contains(&format!(
+            "line {line} (`length_m = -0.39`): section[0].length_m"
+        )) && err.contains("positive"),
         "{err}"
     );
     let err = bad_scene("typo", &good.replace("steps = 100", "stepz = 100"));
@@ -293,6 +301,25 @@ fn bad_scenes_name_the_field_and_the_reason() {
         !out.status.success() && stderr(&out).contains("cable"),
         "{}",
         stderr(&out)
+    );
+}
+
+#[test]
+fn an_unusual_value_is_warned_about_at_its_line_and_the_solve_goes_on() {
+    let good = std::fs::read_to_string(scene("bench_3d_cables.toml")).unwrap();
+    let text = good.replacen("mass_kg = 0.0", "mass_kg = 2.0", 1);
+    let path = write_scene("warned", &text);
+    let out = host_sim(&["solve", &path]);
+    let err = stderr(&out);
+    let line = text.lines().position(|l| l == "mass_kg = 2.0").unwrap() + 1;
+    assert!(
+        out.status.success()
+            && err.contains(&format!(
+                "warning: {path}, line {line} (`mass_kg = 2.0`): guides.mass_kg: 2 kg is a heavy \
+                 guide"
+            ))
+            && err.contains("Did you mean 2e-3 kg (2 g)?"),
+        "{err}"
     );
 }
 

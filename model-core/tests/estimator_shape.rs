@@ -51,11 +51,18 @@ fn check<T: Scalar>(max_sweeps: u8) {
         &mut points,
     )
     .unwrap();
+    // The estimator's tip frame is the estimate's, after the first estimate and every update.
+    assert_eq!(estimator.tip_rotation(), first.tip_rotation);
     let mut estimates = vec![(first, points)];
     for k in 1..10 {
         let estimate = estimator
             .update_with_shape(&lengths(&model, k), &s, &mut points)
             .unwrap();
+        assert_eq!(
+            estimator.tip_rotation(),
+            estimate.tip_rotation,
+            "update {k}"
+        );
         // A budget that runs out (`IterationLimit`) still reports the point it reached, with its shape.
         assert!(
             matches!(

@@ -1,15 +1,18 @@
 //! board image: the estimator on an STM32F405 board with three AS5047P on SPI1, logging with
-//! defmt over RTT. The RTIC task structure of the estimator image: the sampler in a SysTick task at
-//! 1 kHz (priority 2), the estimator loop in `idle`; see `firmware::target::board`.
+//! defmt over RTT and sending each tick's record on the live link (USART1, PA9). The RTIC task
+//! structure of the estimator image: the sampler in a SysTick task at 1 kHz (priority 2), the
+//! estimator loop in `idle`; see `firmware::target::board`.
 #![no_std]
 #![no_main]
 
 use defmt_rtt as _;
+// The panic handler: the message over defmt, then a HardFault (`udf`).
+use panic_probe as _;
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use firmware::sampler::Sampler;
-    use firmware::target::board::{self, BoardSample, BoardSensor};
+    use firmware::target::board::{self, BoardSample, BoardSensor, LinkPort};
 
     #[shared]
     struct Shared {
@@ -20,18 +23,23 @@ mod app {
     #[local]
     struct Local {
         sampler: Sampler<BoardSensor>,
+        /// The live link's USART1 (each tick's record, `firmware::link`).
+        link: LinkPort,
     }
 
     #[init]
     fn init(cx: init::Context) -> (Shared, Local) {
         let mut core = cx.core;
-        let sampler = board::init(cx.device, core.SYST, &mut core.DCB, &mut core.DWT);
-        (Shared { latest: None }, Local { sampler })
+        let (sampler, link) = board::init(cx.device, core.SYST, &mut core.DCB, &mut core.DWT);
+        (Shared { latest: None }, Local { sampler, link })
     }
 
-    #[idle(shared = [latest])]
+    #[idle(shared = [latest], local = [link])]
     fn idle(mut cx: idle::Context) -> ! {
-        board::idle(&mut || cx.shared.latest.lock(|latest| *latest))
+        board::idle(
+            &mut || cx.shared.latest.lock(|latest| *latest),
+            cx.local.link,
+        )
     }
 
     #[task(binds = SysTick, priority = 2, shared = [latest], local = [sampler])]
@@ -41,13 +49,7 @@ mod app {
     }
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    firmware::target::board::on_panic(info)
-}
-
-#[cortex_m_rt::exception]
-#[allow(unsafe_code)]
-unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    firmware::target::board::on_hard_fault(frame)
-}
+firmware::hard_fault_entry!(
+    firmware::target::board::on_hard_fault,
+    firmware::target::board::on_stack_overflow
+);

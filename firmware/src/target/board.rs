@@ -3,7 +3,9 @@
 //! The task structure of the estimator image ([`super::tasks`]): the sampler in a SysTick task at
 //! 1 kHz, priority 2 (three sensors of three 16-bit frames each: about 40 us of the millisecond at
 //! 4 MHz), the estimator loop in RTIC's `idle` every 10 ms on the latest sample, each tick's report
-//! and its cycle count over defmt (RTT).
+//! and its cycle count over defmt (RTT), and each tick's record on the live link: USART1's TX on
+//! PA9 at [`crate::config::LINK_BAUD`] 8N1 (`crate::link`; about 1.4 ms of the 10 ms tick,
+//! blocking, preempted by the sampler).
 //!
 //! The steppers' commanded positions come from [`COMMANDED_STEPS`], which the step generator must
 //! advance as it issues steps. The step generator is not in this firmware yet: until it is, the
@@ -13,8 +15,10 @@
 //! Between two frames to one sensor chip select stays high for the bus driver's software path
 //! (well over the sensor's 350 ns minimum at 168 MHz).
 //!
-//! Failure never hangs silently: a panic or HardFault logs over defmt, then stops at a breakpoint
-//! when a debugger is attached (probe-rs prints the backtrace) and resets the MCU otherwise.
+//! Failure never hangs silently: a panic logs its message over defmt (panic-probe) and ends in a
+//! HardFault (`udf`); a HardFault logs over defmt (an overflowed stack as such, see
+//! [`crate::hard_fault_entry`]), then stops at a breakpoint when a debugger is attached (probe-rs
+//! prints the backtrace) and resets the MCU otherwise.
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicI32, Ordering};
@@ -26,13 +30,15 @@ use stm32f4xx_hal::gpio::{AnyPin, Output};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config;
+use stm32f4xx_hal::serial::{Serial, Tx};
 use stm32f4xx_hal::spi::Spi;
 
 use super::tasks;
 use crate::config::{SAMPLE_RATE_HZ, loop_config};
-use crate::control::EstimatorLoop;
+use crate::control::{EstimatorLoop, Status};
 use crate::encoder::AngleSensor;
 use crate::encoder::as5047p::{self, As5047p};
+use crate::link::{self, RecordWriter};
 use crate::sampler::{Sample, SampleError, Sampler};
 
 /// The sensors' shared bus.
@@ -43,6 +49,9 @@ pub type BoardSensor = As5047p<CriticalSectionDevice<'static, Bus, AnyPin<Output
 
 /// The board's sample.
 pub type BoardSample = Sample<SampleError<<BoardSensor as AngleSensor>::Error>>;
+
+/// The live link's port: USART1's transmitter (PA9).
+pub type LinkPort = Tx<pac::USART1>;
 
 /// The steppers' commanded positions, microsteps since power-up (cables 0, 1, 2): written by the
 /// step generator as it issues steps, read by the sampler every millisecond.
@@ -59,15 +68,6 @@ fn stop() -> ! {
     SCB::sys_reset()
 }
 
-/// The panic handler's body. The message is logged when it is a plain string: a formatted one would
-/// need `core::fmt`, 4 KB of flash.
-pub fn on_panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    let (file, line) = info.location().map_or(("?", 0), |l| (l.file(), l.line()));
-    let message = info.message().as_str().unwrap_or("(formatted message)");
-    defmt::error!("panicked at {}:{}: {}", file, line, message);
-    stop()
-}
-
 /// The HardFault handler's body.
 pub fn on_hard_fault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
     defmt::error!(
@@ -79,15 +79,26 @@ pub fn on_hard_fault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
     stop()
 }
 
-/// The board's `init`: clocks, SPI1 and the three sensors, the sampler, the cycle counter, and
-/// SysTick interrupting at the sampler's rate. Stops (see [`stop`]) if the hardware or the settings
-/// are refused.
+/// The HardFault handler's body when the stack has overflowed: `sp` (the exception frame's address)
+/// is below the stack's bottom, the bottom of RAM under flip-link.
+pub fn on_stack_overflow(sp: u32) -> ! {
+    defmt::error!(
+        "hard fault: stack overflow: sp {=u32:#x} below the stack's bottom {=u32:#x}",
+        sp,
+        super::memory::stack_bottom()
+    );
+    stop()
+}
+
+/// The board's `init`: clocks, SPI1 and the three sensors, the sampler, the live link's USART1,
+/// the cycle counter, and SysTick interrupting at the sampler's rate. Stops (see [`stop`]) if the
+/// hardware or the settings are refused.
 pub fn init(
     dp: pac::Peripherals,
     syst: SYST,
     dcb: &mut DCB,
     dwt: &mut DWT,
-) -> Sampler<BoardSensor> {
+) -> (Sampler<BoardSensor>, LinkPort) {
     let mut rcc = dp.RCC.freeze(Config::hse(8.MHz()).sysclk(SYSCLK_HZ.Hz()));
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
@@ -109,6 +120,14 @@ pub fn init(
         gpiob.pb0.into_push_pull_output().erase(),
         gpiob.pb1.into_push_pull_output().erase(),
     ];
+    let link_config = crate::config::LINK_BAUD.bps();
+    let Ok(link) = Serial::tx(dp.USART1, gpioa.pa9, link_config, &mut rcc) else {
+        defmt::error!(
+            "live link: USART1 refused {} baud",
+            crate::config::LINK_BAUD
+        );
+        stop()
+    };
     let [c0, c1, c2] = select;
     let sensor = |cs| {
         CriticalSectionDevice::new(bus, cs, NoDelay)
@@ -129,7 +148,7 @@ pub fn init(
     dcb.enable_trace();
     dwt.enable_cycle_counter();
     tasks::start_sampling(syst, SYSCLK_HZ, SAMPLE_RATE_HZ);
-    sampler
+    (sampler, link)
 }
 
 /// The sampler task's body: one sample at the steppers' commanded positions now.
@@ -141,11 +160,12 @@ pub fn sample(sampler: &mut Sampler<BoardSensor>) -> BoardSample {
     )
 }
 
-/// The board's `idle`: the estimator loop every 10 ms on the latest sample, forever.
-pub fn idle(latest: &mut dyn FnMut() -> Option<BoardSample>) -> ! {
+/// The board's `idle`: the estimator loop every 10 ms on the latest sample, forever, each tick's
+/// record on `link`.
+pub fn idle(latest: &mut dyn FnMut() -> Option<BoardSample>, link: &mut LinkPort) -> ! {
     let model = crate::config::model();
     match &model {
-        Ok(model) => run_loop(model, latest),
+        Ok(model) => run_loop(model, latest, RecordWriter::new(link)),
         Err(e) => {
             defmt::error!("model refused: {}", e);
             stop()
@@ -157,18 +177,30 @@ pub fn idle(latest: &mut dyn FnMut() -> Option<BoardSample>) -> ! {
 fn run_loop(
     model: &crate::config::BenchModel,
     latest: &mut dyn FnMut() -> Option<BoardSample>,
+    mut writer: RecordWriter<&mut LinkPort>,
 ) -> ! {
     let Ok(mut estimator) = EstimatorLoop::new(model, loop_config()) else {
         defmt::error!("loop settings refused");
         stop()
     };
     let mut due = 0;
+    // The newest estimate's tip frame, read after the tick that published it.
+    let mut tip_orientation = [1.0, 0.0, 0.0, 0.0];
     loop {
         let sample = tasks::wait_for(latest, due);
         let start = DWT::cycle_count();
         let report = estimator.tick(&sample);
         let cycles = DWT::cycle_count().wrapping_sub(start);
         defmt::info!("{} cycles={=u32}", report, cycles);
+        if let (Status::Fresh, Some(rotation)) = (report.status, estimator.tip_rotation()) {
+            tip_orientation = link::orientation(&rotation);
+        }
+        let estimate = report.estimate.as_ref();
+        let record = link::record(report.tick, &report.status, estimate, tip_orientation);
+        if let Err(e) = writer.send(&record) {
+            let e = defmt::Debug2Format(&e);
+            defmt::warn!("live link: tick {} not sent: {}", report.tick, e);
+        }
         let finished = latest().map_or(sample.seq, |s| s.seq);
         if finished.wrapping_sub(sample.seq) >= crate::config::SAMPLES_PER_TICK {
             defmt::warn!("tick {} overran its period", report.tick);

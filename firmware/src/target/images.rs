@@ -1,13 +1,15 @@
 //! The bodies of the QEMU images (`src/bin/*.rs`): each prints plain text over semihosting and
 //! returns whether it passed. The closing line `N passed, N failed` is what CI reads.
 
+use core::sync::atomic::{AtomicU32, Ordering};
+
 use cortex_m_semihosting::hprintln;
 
 use super::counter::{self, Counter};
 use super::memory;
 use super::stopwatch::Stopwatch;
 use super::tasks;
-use crate::checks::{self, Expected};
+use crate::checks::{self, BenchLoop, Expected, ReplayReport, TickCheck};
 use crate::config::{SAMPLE_RATE_HZ, SAMPLES_PER_TICK};
 use crate::control::Status;
 use crate::encoder::replay::ReplayError;
@@ -74,8 +76,48 @@ fn status_name<E>(status: &Status<SampleError<E>>) -> &'static str {
     }
 }
 
-/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference.
+/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference
+/// ([`e2e_trajectory`]), each tick's record sent on the live link: USART1, QEMU's first serial
+/// port, which `test.sh` captures and host-sim checks against the same reference. A record goes
+/// out after its tick's cost was measured. Passes when the checks pass and every tick's record
+/// went out.
+#[cfg(feature = "link")]
 pub fn e2e() -> bool {
+    use super::uart::{RESET_PCLK2_HZ, Usart1Tx};
+    use crate::link::{self, RecordWriter};
+
+    let Some(device) = super::device::Peripherals::take() else {
+        return false;
+    };
+    let port = Usart1Tx::new(device.USART1, RESET_PCLK2_HZ, crate::config::LINK_BAUD);
+    let mut writer = RecordWriter::new(port);
+    let (mut records, mut bytes, mut unsent) = (0u32, 0usize, 0u32);
+    // The newest estimate's tip frame, read from the loop after the tick that published it.
+    let mut tip_orientation = [1.0, 0.0, 0.0, 0.0];
+    let passed = e2e_trajectory(&mut |_, report, estimator| {
+        if let (Status::Fresh, Some(rotation)) = (report.status, estimator.tip_rotation()) {
+            tip_orientation = link::orientation(&rotation);
+        }
+        let estimate = report.estimate.as_ref();
+        let record = link::record(report.tick, &report.status, estimate, tip_orientation);
+        match writer.send(&record) {
+            Ok(n) => (records, bytes) = (records + 1, bytes + n),
+            Err(_) => unsent += 1,
+        }
+    });
+    hprintln!(
+        "e2e: live link: {} records, {} bytes on USART1, {} not sent",
+        records,
+        bytes,
+        unsent
+    );
+    passed && unsent == 0 && records as usize == TICK_COUNT
+}
+
+/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference,
+/// calling `tap` after each tick with its verdict, the loop's report and the loop (for [`e2e`]'s
+/// live link; outside the measured tick).
+pub fn e2e_trajectory(tap: &mut dyn FnMut(&TickCheck, &ReplayReport, &BenchLoop<'_>)) -> bool {
     let model = match crate::config::model() {
         Ok(model) => model,
         Err(e) => {
@@ -94,7 +136,7 @@ pub fn e2e() -> bool {
         micro(checks::FORCE_TOLERANCE_N, 1e6)
     );
     let clock = || counter::instructions(counter.ticks());
-    let result = checks::run_trajectory(&model, &clock, |c| {
+    let result = checks::run_trajectory(&model, &clock, |c, report, estimator| {
         let expected = match c.expected {
             Expected::Fresh => "",
             Expected::SensorFault => " (injected sensor fault)",
@@ -112,6 +154,7 @@ pub fn e2e() -> bool {
             if c.passed { "pass" } else { "FAIL" },
             expected
         );
+        tap(c, report, estimator);
     });
     let summary = match result {
         Ok(summary) => summary,
@@ -240,6 +283,65 @@ pub fn tendon() -> bool {
 pub fn fault() -> bool {
     hprintln!("fault: executing an undefined instruction");
     cortex_m::asm::udf()
+}
+
+/// Frames the `overflow` image's recursion has entered (a static: at the top of RAM under flip-link,
+/// just above the stack without it, where an overflowing stack would write over it).
+static OVERFLOW_FRAMES: AtomicU32 = AtomicU32::new(0);
+
+/// Words the overflowing stack would overwrite without flip-link (`.data`, next to the counter):
+/// 128 B, more than a level of the recursion, so that one of the levels written in full before the
+/// fault lands on them.
+static OVERFLOW_CANARY: [AtomicU32; 32] = [const { AtomicU32::new(CANARY) }; 32];
+
+/// The canary's value: no frame of the recursion holds it (they hold `u32::MAX` minus the depth).
+const CANARY: u32 = 0x5afe_c0de;
+
+/// Bytes of stack each level of the recursion fills (its frame adds the saved registers): small,
+/// so that the recursion writes every word on its way down, the statics' too where they lie in its
+/// path (without flip-link), before a write leaves RAM.
+const OVERFLOW_FRAME_BYTES: usize = 64;
+
+/// Recurses past the stack: every level fills 64 B of it, until the stack leaves RAM at its bottom
+/// and the access faults. The HardFault must say so ([`overflow_report`]); returning is a failure.
+pub fn overflow() -> bool {
+    let stack = memory::stack_top() - memory::stack_bottom();
+    hprintln!(
+        "overflow: recursing {} B a frame through the stack's {} B",
+        OVERFLOW_FRAME_BYTES,
+        stack
+    );
+    let depth = recurse(core::hint::black_box(u32::MAX));
+    hprintln!("overflow: the recursion returned ({}): no fault", depth);
+    false
+}
+
+/// One level of [`overflow`]'s recursion: 64 B of the stack written, and a count of the levels.
+#[inline(never)]
+fn recurse(limit: u32) -> u32 {
+    OVERFLOW_FRAMES.fetch_add(1, Ordering::Relaxed);
+    let frame = [limit; OVERFLOW_FRAME_BYTES / 4];
+    core::hint::black_box(&frame);
+    if limit == 0 {
+        return 0;
+    }
+    // Not a tail call: the frame stays live across it.
+    recurse(limit - 1).wrapping_add(core::hint::black_box(&frame).len() as u32)
+}
+
+/// The `overflow` image's report of the HardFault on its overflowed stack: how deep it went and
+/// whether the statics survived, then the shared report (and exit with failure).
+pub fn overflow_report(sp: u32) -> ! {
+    let frames = OVERFLOW_FRAMES.load(Ordering::Relaxed);
+    if OVERFLOW_CANARY
+        .iter()
+        .all(|word| word.load(Ordering::Relaxed) == CANARY)
+    {
+        crate::hostln!("overflow: {} frames deep, the statics intact", frames);
+    } else {
+        crate::hostln!("overflow: {} frames deep, the statics OVERWRITTEN", frames);
+    }
+    super::on_stack_overflow(sp)
 }
 
 /// Panics: the panic handler must report it and exit with 1.

@@ -126,7 +126,8 @@ pub(crate) fn figure<A: Attitude<f64>>(
         disks_m,
         tendons,
         cables,
-        tip_m,
+        tip_m: Some(tip_m),
         tip_std_m: spec.tip_std_m,
+        ..Figure::default()
     })
 }

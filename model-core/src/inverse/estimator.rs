@@ -1,6 +1,6 @@
 //! The warm-started inverse for a control loop: one bounded update per tick from the last estimate.
 
-use nalgebra::{SVector, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 
 use super::basis::{LoadBasis, ParamCount, Params};
 use super::quality::Determination;
@@ -216,6 +216,12 @@ where
     /// The current parameters.
     pub fn params(&self) -> SVector<T, P> {
         self.x.p
+    }
+
+    /// The tip frame at the current parameters (columns: the tip's axes in global coordinates):
+    /// the last estimate's [`Estimate::tip_rotation`], whether that update converged or not.
+    pub fn tip_rotation(&self) -> Matrix3<T> {
+        self.lin.tip_rotation
     }
 
     fn problem(&self, measured: CableVector<T>) -> Problem<'a, T, A, P, NODES> {
