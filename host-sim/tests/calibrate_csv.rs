@@ -7,7 +7,6 @@
 //! `the_shipped_example_is_current_and_calibrates` with `UPDATE_CALIBRATION_EXAMPLE=1`.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 use host_sim::calibrate::data::{DataShape, Measurements};
 use host_sim::calibrate::fit::{Calibration, Verdict, calibrate};
@@ -17,6 +16,9 @@ use host_sim::scene::{Actuation, Control, Scene};
 use model_core::TipLoad;
 use nalgebra::{Rotation3, Vector3};
 use serde_json::Value;
+
+mod common;
+use common::{code, host_sim, stderr, stdout, temp_dir};
 
 /// A 40 cm nitinol rod clamped along +x under gravity along -y, with few steps (fast).
 const ROD: &str = "\
@@ -541,35 +543,6 @@ fn the_thesis_tables_calibrate_as_before() {
 }
 
 // The command line.
-
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn code(o: &Output) -> i32 {
-    let err = stderr(o);
-    assert!(!err.contains("panicked"), "{err}");
-    o.status.code().expect("exited")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("host-sim-calibrate-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
 
 fn write(dir: &std::path::Path, name: &str, text: &str) -> String {
     let path = dir.join(name);

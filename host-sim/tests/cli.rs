@@ -1,40 +1,12 @@
 //! The `host-sim` command line, run as a user runs it: exit codes, printed numbers, files.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use model_checks::reference::golden_rows;
 use serde_json::Value;
 
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn scene(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name)
-        .display()
-        .to_string()
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("host-sim-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
+mod common;
+use common::{code, host_sim, scene, stderr, stdout, temp_dir, write_scene};
 
 /// The number after `label` on the line that contains it.
 fn number_after(text: &str, label: &str) -> f64 {
@@ -466,29 +438,8 @@ fn study_refuses_an_unknown_scene() {
 
 // ---- Failures look like failures: exit codes, the status in every format, no failed iterate. ----
 
-/// Writes `text` as a scene file in a fresh temporary directory and returns its path.
-fn write_scene(name: &str, text: &str) -> String {
-    let path = temp_dir(name).join("scene.toml");
-    std::fs::write(&path, text).unwrap();
-    path.display().to_string()
-}
-
 fn bench_text() -> String {
     std::fs::read_to_string(scene("bench_3d_cables.toml")).unwrap()
-}
-
-/// The exit code, and that the run did not panic or abort.
-fn code(o: &Output) -> i32 {
-    let err = stderr(o);
-    assert!(
-        !err.contains("panicked")
-            && !err.contains("backtrace")
-            && !err.contains("memory allocation"),
-        "{err}"
-    );
-    o.status
-        .code()
-        .unwrap_or_else(|| panic!("killed by a signal: {err}"))
 }
 
 /// The JSON output.

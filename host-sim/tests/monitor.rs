@@ -4,7 +4,7 @@
 
 use std::io::Write as _;
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
 use host_sim::monitor::{
     Checker, Event, Monitor, Reference, Tolerances, csv_header, csv_row, record_line,
@@ -12,6 +12,9 @@ use host_sim::monitor::{
 use nalgebra::{UnitQuaternion, Vector3};
 use robot_link::heapless::Vec as Bounded;
 use robot_link::{Estimate, MAX_FRAME_BYTES, Record, Rejection, Status, encode};
+
+mod common;
+use common::{host_sim, temp_dir};
 
 const TICKS: u32 = 12;
 /// Tick 5's reading is refused: its record carries tick 4's estimate.
@@ -123,20 +126,6 @@ fn decode_all(bytes: &[u8]) -> (Monitor, Vec<Event>) {
     // In small pieces, as a serial port hands them out.
     let events = bytes.chunks(7).flat_map(|c| monitor.feed(c)).collect();
     (monitor, events)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("host-sim-monitor-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 fn text(bytes: &[u8]) -> String {

@@ -3,63 +3,16 @@
 //! refused with the key named (exit 1), never a panic.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use model_checks::reference::{self, csv_rows, golden_rows};
 use serde_json::Value;
 
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn scene(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name)
-        .display()
-        .to_string()
-}
+mod common;
+use common::{code, host_sim, scene, stderr, stdout, write_scene};
 
 fn scene_text(name: &str) -> String {
     std::fs::read_to_string(scene(name)).unwrap()
-}
-
-/// Writes `text` as a scene file in a fresh temporary directory and returns its path.
-fn write_scene(name: &str, text: &str) -> String {
-    let dir = std::env::temp_dir().join(format!(
-        "host-sim-tendon-test-{name}-{}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, text).unwrap();
-    path.display().to_string()
-}
-
-/// The exit code, and that the run did not panic or abort.
-fn code(o: &Output) -> i32 {
-    let err = stderr(o);
-    assert!(
-        !err.contains("panicked")
-            && !err.contains("backtrace")
-            && !err.contains("memory allocation"),
-        "{err}"
-    );
-    o.status
-        .code()
-        .unwrap_or_else(|| panic!("killed by a signal: {err}"))
 }
 
 fn json_of(o: &Output) -> Value {
