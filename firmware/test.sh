@@ -8,7 +8,8 @@
 #   reported HardFault with the statics intact), the board image (build only: it needs the real
 #   STM32F405's clock tree), the tendon image (golden tendon rows and a recorded actuation), and the
 #   estimator and tendon images' flash/RAM budgets against the committed expected values in
-#   expected/.
+#   expected/; then the robot file: robots that do not fit must not build, and the `robot` image of
+#   the default robot and of robots/two_section.toml, checked by host-sim against the same files.
 #
 # Installs flip-link, the images' linker, when it is missing (install-tools.sh: `cargo install`,
 # pinned). Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it
@@ -312,6 +313,78 @@ check "tendon image within its budget (128 KiB, 32 KiB), sizes match expected/te
 # panic-probe to the library's dependencies; the QEMU images above are built without it.
 check "build the board image (build only: it needs the real STM32F405's clock tree)" \
     cargo build --release --bin board
+
+# Any robot: the `robot` image built from a robot file (ROBOT, relative to this directory), run on
+# QEMU with its records captured; host-sim solves the same file in f64 at the tip forces the image
+# applied (`host-sim reference`) and checks every record against them (`host-sim monitor`). These
+# builds come last: another robot rebuilds the library, so the images above are the default
+# robot's; each ELF is copied to $OUT/robot-NAME.elf.
+robot_end_to_end() {
+    local name="$1" file="$2" image="$OUT/robot-$1" status=0
+    ROBOT="$file" cargo build --release --no-default-features --features link --bin robot || return 1
+    cp "$RELEASE/robot" "$image.elf"
+    rm -f "$image.link"
+    QEMU_SERIAL="$image.link" ./qemu.sh "$image.elf" >"$image.out" 2>&1 || status=$?
+    grep -Ev '^(applied|tick) ' "$image.out"
+    if [[ "$status" != 0 ]] || ! grep -Eq '^robot: [0-9]+ passed, 0 failed$' "$image.out"; then
+        echo "robot-$name: exit status $status, or not every tick passed"
+        return 1
+    fi
+    {
+        echo "tick,force_x_n,force_y_n,force_z_n"
+        sed -n 's/^applied tick=\([0-9]*\) force_n=\(.*\)$/\1,\2/p' "$image.out"
+    } >"$image.forces.csv"
+    (cd .. && cargo run --release --quiet -p host-sim -- reference "firmware/$file" \
+        --forces "firmware/$image.forces.csv" --out "firmware/$image.reference.csv") || return 1
+    monitor --input "firmware/$image.link" --check-against "firmware/$image.reference.csv" --quiet
+}
+
+# must_not_build NAME PATTERN [VARIABLE]: a robot that does not fit is a build error naming what
+# does not fit. The robot file is $OUT/NAME.toml (written by the caller), given in VARIABLE (ROBOT,
+# or TENDON_ROBOT for the tendon image's).
+must_not_build() {
+    local name="$1" pattern="$2" variable="${3:-ROBOT}" status=0
+    env "$variable=$OUT/$name.toml" cargo build --release --lib --no-default-features \
+        >"$OUT/$name.build" 2>&1 || status=$?
+    grep -E "$pattern" "$OUT/$name.build" | head -n 3
+    if [[ "$status" == 0 ]]; then
+        echo "$name: the build succeeded"
+        return 1
+    fi
+    grep -Eq "$pattern" "$OUT/$name.build" || {
+        tail -n 20 "$OUT/$name.build"
+        echo "$name: no error matching /$pattern/"
+        return 1
+    }
+}
+
+# The default robot with a fourth cable (its drive lists extended to match): the sampler reads three.
+sed -e '0,/^\[drive\]/s//[[cable]]\nangle_deg = 60.0\nradius_m = 0.01\n\n[drive]/' \
+    -e 's/^home_lengths_m = \[\(.*\)\]/home_lengths_m = [\1, 0.38]/' \
+    -e 's/^zero_offset_counts = \[\(.*\)\]/zero_offset_counts = [\1, 0]/' \
+    -e 's/^reel_in_with_counts = \[\(.*\)\]/reel_in_with_counts = [\1, false]/' \
+    robots/bench.toml >"$OUT/four-cables.toml"
+# A drive whose sensor turns more than the sampler can follow between two samples.
+sed -e 's/^max_cable_speed_m_per_s = .*/max_cable_speed_m_per_s = 0.5/' robots/bench.toml \
+    >"$OUT/too-fast.toml"
+# No [controller] table.
+sed -e '/^\[controller\]/,$d' robots/bench.toml >"$OUT/no-controller.toml"
+# The tendon robot with a fourth tendon.
+sed -e '0,/^\[actuation\]/s//[[tendon]]\nangle_deg = 60.0\nradius_m = 0.01\n\n[actuation]/' \
+    -e 's/^tensions_n = \[\(.*\)\]/tensions_n = [\1, 0.0]/' \
+    robots/tendon_bench.toml >"$OUT/four-tendons.toml"
+check "robot file: four cables is a build error naming the 4 cables and the capacity, 3" \
+    must_not_build four-cables '4 \[\[cable\]\] tables; the firmware reads exactly 3 cables'
+check "robot file: a drive too fast for the sampler is a build error naming the drive's keys" \
+    must_not_build too-fast "drive turns the sensor too far in a sampling period"
+check "robot file: no [controller] table is a build error naming it" \
+    must_not_build no-controller 'the firmware needs its \[drive\] and \[controller\] tables'
+check "tendon robot file: four tendons is a build error naming the 4 tendons and the capacity, 3" \
+    must_not_build four-tendons '4 \[\[tendon\]\] tables; the tendon image drives exactly 3' TENDON_ROBOT
+check "QEMU robot: the default robot file along its load path, records checked by host-sim in f64" \
+    robot_end_to_end bench robots/bench.toml
+check "QEMU robot: robots/two_section.toml (27 nodes) along its load path, checked by host-sim in f64" \
+    robot_end_to_end two_section robots/two_section.toml
 
 printf '\n== summary\n'
 printf '%s\n' "${summary[@]}"

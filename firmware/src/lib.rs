@@ -13,9 +13,10 @@
 //! | reading validation (typed rejections) | [`validate`] |
 //! | the estimator loop and its output records | [`control`] |
 //! | the live link: each tick's record over a UART (`robot-link`'s frames; feature `link`) | `link` |
-//! | the composition root: the robot (rod, model), spools, loop settings | [`config`] |
+//! | the composition root: the robot of the robot file (rod, model), spools, loop settings | [`config`] |
 //! | the recorded trajectory and its f64 reference | [`fixture`] |
 //! | end-to-end and golden checks run by the images | [`checks`] |
+//! | any robot's load path through the loop (the `robot` image, checked by host-sim) | [`robot_check`] |
 //! | instruction-count benchmarks | [`bench`] |
 //! | the tendon-driven robot: displacement control in f32, its golden and trajectory checks | [`tendon`] |
 
@@ -29,6 +30,7 @@ pub mod encoder;
 pub mod fixture;
 #[cfg(any(test, feature = "link"))]
 pub mod link;
+pub mod robot_check;
 pub mod sampler;
 pub mod spool;
 pub mod stepper;

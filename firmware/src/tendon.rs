@@ -1,5 +1,6 @@
-//! The tendon-driven robot on the MCU: the thesis bench with three tendons that the spools pull
-//! (steel wire behind a feed from the spools), estimated in f32 from the spools' displacements.
+//! The tendon-driven robot on the MCU: the robot of its robot file (by default the thesis bench
+//! with three tendons that the spools pull, steel wire behind a feed from the spools), estimated
+//! in f32 from the spools' displacements.
 //! Target-agnostic: the `tendon` image runs these checks under QEMU, the host tests run the same
 //! code.
 //!
@@ -18,20 +19,14 @@ use model_core::{
 };
 use nalgebra::Vector3;
 
-/// RK4 steps over the rod: the passive estimator's.
-pub const STEPS_PER_SECTION: u16 = crate::config::STEPS_PER_SECTION;
-
-/// Nodes of the tendon bench's plan (base, six guides, tip).
-pub const TENDON_NODES: usize = 12;
+// The robot: read at build time from its robot file (`TENDON_ROBOT=path/to/robot.toml`,
+// `robots/tendon_bench.toml` by default) by `build.rs`: `TENDON_ROBOT_FILE`, `TENDON_COUNT`,
+// `STEPS_PER_SECTION` (the file's `controller.steps_per_section`), `TENDON_NODES` (its plan's),
+// `push_tendon_robot` and `tendon_specs`.
+include!(concat!(env!("OUT_DIR"), "/tendon_robot.rs"));
 
 /// The tendon estimator's model: f32, quaternion attitude.
 pub type TendonModel = Model<f32, Quaternion<f32>, TENDON_NODES>;
-
-/// Axial stiffness `E_t A_t` of the tendons of the trajectory (0.3 mm steel wire), N.
-pub const AXIAL_STIFFNESS_N: f64 = 14_000.0;
-
-/// Free length from each spool to the base plate, m.
-pub const FEED_LENGTH_M: f64 = 0.3;
 
 /// Largest tip error against the f64 reference, m (0.1 mm).
 pub const TIP_TOLERANCE_M: f64 = 1.0e-4;
@@ -63,19 +58,34 @@ pub struct TickReference {
     pub slack: [bool; 3],
 }
 
-/// The tendon robot: the golden tendon bench at [`STEPS_PER_SECTION`]; with `compliant`, the
-/// trajectory's steel tendons behind their feed.
+/// The tendon robot of the robot file in `T` at `steps_per_section`, and its tendons: as the file
+/// has them with `compliant` (the default file: the trajectory's steel tendons behind their feed),
+/// else inextensible (the golden reference's convention).
 ///
 /// # Errors
-/// If the model refuses the bench (it does not).
-pub fn robot(compliant: bool) -> Result<(TendonModel, Tendons<f32>), ModelError> {
-    let (rod, mut tendons) = reference::tendon_bench::<f32>(STEPS_PER_SECTION)?;
-    if compliant {
+/// If the model refuses the rod (the build ruled it out).
+pub fn rod_and_tendons<T: model_core::Scalar>(
+    steps_per_section: u16,
+    compliant: bool,
+) -> Result<(model_core::Rod<T>, [model_core::Tendon<T>; TENDON_COUNT]), ModelError> {
+    let mut rod = model_core::Rod::new();
+    push_tendon_robot(&mut rod, steps_per_section)?;
+    let mut tendons = tendon_specs::<T>();
+    if !compliant {
         for t in tendons.iter_mut() {
-            t.axial_stiffness_n = Some(AXIAL_STIFFNESS_N as f32);
-            t.feed_length_m = FEED_LENGTH_M as f32;
+            t.axial_stiffness_n = None;
+            t.feed_length_m = T::zero();
         }
     }
+    Ok((rod, tendons))
+}
+
+/// The tendon robot's f32 model at [`STEPS_PER_SECTION`] and its tendons ([`rod_and_tendons`]).
+///
+/// # Errors
+/// If the model refuses the robot (the build ruled it out).
+pub fn robot(compliant: bool) -> Result<(TendonModel, Tendons<f32>), ModelError> {
+    let (rod, tendons) = rod_and_tendons::<f32>(STEPS_PER_SECTION, compliant)?;
     let model = TendonModel::new(rod)?;
     let tendons = Tendons::new(&model, &tendons)?;
     Ok((model, tendons))
@@ -303,11 +313,7 @@ mod tests {
 
     /// The f64 model along the recorded actuation.
     fn reference_in_f64() -> Vec<TickReference> {
-        let (rod, mut tendons) = reference::tendon_bench::<f64>(STEPS_PER_SECTION).unwrap();
-        for t in tendons.iter_mut() {
-            t.axial_stiffness_n = Some(AXIAL_STIFFNESS_N);
-            t.feed_length_m = FEED_LENGTH_M;
-        }
+        let (rod, tendons) = rod_and_tendons::<f64>(STEPS_PER_SECTION, true).unwrap();
         let model = Model::<f64, Quaternion<f64>, TENDON_NODES>::new(rod).unwrap();
         let set = Tendons::new(&model, &tendons).unwrap();
         let mut previous: Option<TendonEquilibrium<f64>> = None;
@@ -334,6 +340,32 @@ mod tests {
                 r
             })
             .collect()
+    }
+
+    #[test]
+    fn the_default_tendon_robot_file_is_the_golden_tendon_bench() -> Result<(), ModelError> {
+        // Inextensible, as the reference; the file's own tendons are the trajectory's steel wire.
+        for steps in [STEPS_PER_SECTION, 40] {
+            let (rod, tendons) = rod_and_tendons::<f64>(steps, false)?;
+            let (reference_rod, reference_tendons) = reference::tendon_bench::<f64>(steps)?;
+            crate::checks::assert_same_rod(&rod, &reference_rod, f64::EPSILON, 4.0);
+            let (rod32, _) = rod_and_tendons::<f32>(steps, false)?;
+            let (reference32, _) = reference::tendon_bench::<f32>(steps)?;
+            crate::checks::assert_same_rod(&rod32, &reference32, f64::from(f32::EPSILON), 4.0);
+            for (t, r) in tendons.iter().zip(&reference_tendons) {
+                assert!((t.hole_m - r.hole_m).norm() < 1e-17 && t.end_m == r.end_m);
+                assert_eq!(t.axial_stiffness_n, None);
+                assert_eq!(t.friction_coefficient, 0.0);
+            }
+        }
+        let (_, compliant) = rod_and_tendons::<f64>(STEPS_PER_SECTION, true)?;
+        for t in compliant {
+            assert_eq!(
+                (t.axial_stiffness_n, t.feed_length_m),
+                (Some(14_000.0), 0.3)
+            );
+        }
+        Ok(())
     }
 
     #[test]

@@ -7,6 +7,6 @@ pub mod monitor;
 pub mod plots;
 pub mod report;
 pub mod run;
-pub mod scene;
+pub use robot_scene as scene;
 pub mod scenes;
 pub mod thesis;

@@ -240,6 +240,10 @@ enum Command {
     /// --check-against a reference. Exits 1 when a check fails.
     #[command(after_help = host_sim::monitor::MONITOR_HELP)]
     Monitor(host_sim::monitor::Args),
+    /// The f64 reference of a load path for `monitor --check-against`: the scene solved at each
+    /// tick's tip force (CSV: tick, force_x_n, force_y_n, force_z_n), with the tip, its frame and
+    /// points of the backbone. Exits 1 for invalid input or a tick without a stable solve.
+    Reference(host_sim::monitor::reference::Args),
 }
 
 fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
@@ -667,6 +671,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Study(args) => return study::main(&args),
         Command::Monitor(args) => return host_sim::monitor::main(&args),
+        Command::Reference(args) => return host_sim::monitor::reference::main(&args),
         Command::Validate { plots } => match thesis::validate() {
             Ok(v) => {
                 print!("{}", report::validation(&v));

@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use host_sim::plots::{
-    Figure, PNG_DPI, PlotSize, TendonPath, UNITS_PER_PT, draw_figure, tendon_rgb,
+    Figure, PNG_DPI, PNG_PIXELS_PER_METRE, PlotSize, TendonPath, UNITS_PER_PT, draw_figure,
+    tendon_rgb,
 };
 use nalgebra::Vector3;
 use resvg::tiny_skia::Pixmap;
@@ -62,7 +63,7 @@ fn the_svg_has_its_printed_size_and_readable_fonts() {
         draw_figure(&figure(), &path, size).expect("drawn");
         let svg = std::fs::read_to_string(&path).unwrap();
         assert!(
-            svg.contains(&format!("width=\"{width_in}in\"")),
+            svg.contains(&format!("width=\"{width_in:.3}in\"")),
             "{size:?}: {}",
             &svg[..200]
         );
@@ -84,6 +85,18 @@ fn the_png_is_300_dpi_and_anti_aliased() {
     draw_figure(&figure(), &path, PlotSize::Column).expect("drawn");
     let png = Pixmap::load_png(&path).expect("a PNG");
     assert_eq!(f64::from(png.width()), (3.5 * PNG_DPI).round());
+    // The file says its resolution (pHYs, pixels per metre): 300 dpi, not a viewer's default.
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&path).expect("the PNG"),
+    ));
+    let reader = decoder.read_info().expect("a PNG header");
+    let dims = reader.info().pixel_dims.expect("a pHYs chunk");
+    assert_eq!(dims.unit, png::Unit::Meter);
+    assert_eq!(
+        (dims.xppu, dims.yppu),
+        (PNG_PIXELS_PER_METRE, PNG_PIXELS_PER_METRE)
+    );
+    assert!((f64::from(dims.xppu) * 0.0254 - PNG_DPI).abs() < 0.01);
     // Anti-aliased: along the tendon's edges, pixels between its colour and the white background
     // (a line drawn without anti-aliasing has only the two).
     let (r, g, b) = tendon_rgb(0);

@@ -262,6 +262,13 @@ fn the_check_passes_its_reference_and_fails_what_differs() {
     bad[4].estimate = Some(point);
     bad[6].status = Status::Inconsistent;
     bad[7].estimate = Some(estimate(6));
+    // Not a number anywhere fails its tick: a NaN backbone point, a NaN force.
+    let mut nan_point = e(&bad[8]);
+    nan_point.backbone_m[2][0] = f32::NAN;
+    bad[8].estimate = Some(nan_point);
+    let mut nan_force = e(&bad[9]);
+    nan_force.tip_force_n[1] = f32::NAN;
+    bad[9].estimate = Some(nan_force);
     let mut checker = Checker::new(reference.clone(), tolerances);
     let failed: Vec<(u32, String)> = bad
         .iter()
@@ -271,7 +278,7 @@ fn the_check_passes_its_reference_and_fails_what_differs() {
         })
         .collect();
     let ticks: Vec<u32> = failed.iter().map(|(t, _)| *t).collect();
-    assert_eq!(ticks, [1, 2, 3, 4, 6, 7], "{failed:?}");
+    assert_eq!(ticks, [1, 2, 3, 4, 6, 7, 8, 9], "{failed:?}");
     for (needle, (_, why)) in [
         "tip",
         "force",
@@ -279,6 +286,8 @@ fn the_check_passes_its_reference_and_fails_what_differs() {
         "backbone",
         "status",
         "estimate",
+        "backbone",
+        "force",
     ]
     .iter()
     .zip(&failed)

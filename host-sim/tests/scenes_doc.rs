@@ -68,6 +68,22 @@ resolution_m = 1e-5
 
 [estimate.tendons]
 scan_reach = 3.0
+
+[drive]
+spool_radius_m = 0.005
+gear_ratio = 8
+encoder_counts_per_turn = 16384
+motor_full_steps_per_turn = 200
+microsteps_per_full_step = 16
+max_cable_speed_m_per_s = 0.05
+home_lengths_m = [0.3]
+zero_offset_counts = [0]
+reel_in_with_counts = [false]
+
+[controller]
+loop_rate_hz = 100
+sample_rate_hz = 1000
+steps_per_section = 20
 "#;
 
 /// Where a case writes [`BOGUS`].
@@ -83,7 +99,7 @@ enum Place {
 
 /// Each table of the format: its key path, the heading of its section in SCENES.md (the heading's
 /// text starts with it) and where its bogus key goes.
-const TABLES: [(&str, &str, Place); 16] = [
+const TABLES: [(&str, &str, Place); 18] = [
     ("", "Top level", Place::Top),
     ("base", "`[base]`", Place::After("[base]")),
     ("section", "`[[section]]`", Place::After("[[section]]")),
@@ -116,6 +132,8 @@ const TABLES: [(&str, &str, Place); 16] = [
         "`[estimate.tendons]`",
         Place::After("[estimate.tendons]"),
     ),
+    ("drive", "`[drive]`", Place::After("[drive]")),
+    ("controller", "`[controller]`", Place::After("[controller]")),
 ];
 
 /// `text` with [`BOGUS`] written at `place`.

@@ -38,6 +38,11 @@ fn micro(x: f64, scale: f64) -> u32 {
     }
 }
 
+/// A check's summary, or `None` once it has said why the check could not start.
+fn started<S, E: core::fmt::Debug>(result: Result<S, E>) -> Option<S> {
+    result.map_err(|e| hprintln!("setup refused: {:?}", e)).ok()
+}
+
 /// model-core's no_std self-checks in f32.
 pub fn selftest() -> bool {
     hprintln!("selftest: model-core self-checks in f32 on the Cortex-M4F");
@@ -76,42 +81,150 @@ fn status_name<E>(status: &Status<SampleError<E>>) -> &'static str {
     }
 }
 
-/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference
-/// ([`e2e_trajectory`]), each tick's record sent on the live link: USART1, QEMU's first serial
-/// port, which `test.sh` captures and host-sim checks against the same reference. A record goes
-/// out after its tick's cost was measured. Passes when the checks pass and every tick's record
-/// went out.
+/// The live link as the images drive it: each tick's record framed onto USART1, QEMU's first
+/// serial port, which `test.sh` captures for host-sim; the newest fresh estimate's tip frame kept
+/// with it.
 #[cfg(feature = "link")]
-pub fn e2e() -> bool {
-    use super::uart::{RESET_PCLK2_HZ, Usart1Tx};
-    use crate::link::{self, RecordWriter};
+struct LinkOut {
+    writer: crate::link::RecordWriter<super::uart::Usart1Tx>,
+    tip_orientation: [f32; 4],
+    records: u32,
+    bytes: usize,
+    unsent: u32,
+}
 
-    let Some(device) = super::device::Peripherals::take() else {
-        return false;
-    };
-    let port = Usart1Tx::new(device.USART1, RESET_PCLK2_HZ, crate::config::LINK_BAUD);
-    let mut writer = RecordWriter::new(port);
-    let (mut records, mut bytes, mut unsent) = (0u32, 0usize, 0u32);
-    // The newest estimate's tip frame, read from the loop after the tick that published it.
-    let mut tip_orientation = [1.0, 0.0, 0.0, 0.0];
-    let passed = e2e_trajectory(&mut |_, report, estimator| {
-        if let (Status::Fresh, Some(rotation)) = (report.status, estimator.tip_rotation()) {
-            tip_orientation = link::orientation(&rotation);
+#[cfg(feature = "link")]
+impl LinkOut {
+    fn take() -> Option<Self> {
+        use super::uart::{RESET_PCLK2_HZ, Usart1Tx};
+        let device = super::device::Peripherals::take()?;
+        let port = Usart1Tx::new(device.USART1, RESET_PCLK2_HZ, crate::config::LINK_BAUD);
+        Some(Self {
+            writer: crate::link::RecordWriter::new(port),
+            tip_orientation: [1.0, 0.0, 0.0, 0.0],
+            records: 0,
+            bytes: 0,
+            unsent: 0,
+        })
+    }
+
+    /// Sends a tick's record (outside the measured tick), reading the tip frame of a fresh
+    /// estimate from the loop.
+    fn send<E>(
+        &mut self,
+        report: &crate::control::TickReport<SampleError<E>>,
+        estimator: &BenchLoop<'_>,
+    ) {
+        if matches!(report.status, Status::Fresh)
+            && let Some(rotation) = estimator.tip_rotation()
+        {
+            self.tip_orientation = crate::link::orientation(&rotation);
         }
         let estimate = report.estimate.as_ref();
-        let record = link::record(report.tick, &report.status, estimate, tip_orientation);
-        match writer.send(&record) {
-            Ok(n) => (records, bytes) = (records + 1, bytes + n),
-            Err(_) => unsent += 1,
+        let record =
+            crate::link::record(report.tick, &report.status, estimate, self.tip_orientation);
+        match self.writer.send(&record) {
+            Ok(n) => (self.records, self.bytes) = (self.records + 1, self.bytes + n),
+            Err(_) => self.unsent += 1,
         }
-    });
+    }
+
+    /// Prints the tally; whether `ticks` records went out.
+    fn close(&self, image: &str, ticks: usize) -> bool {
+        hprintln!(
+            "{}: live link: {} records, {} bytes on USART1, {} not sent",
+            image,
+            self.records,
+            self.bytes,
+            self.unsent
+        );
+        self.unsent == 0 && self.records as usize == ticks
+    }
+}
+
+/// The recorded trajectory through the encoders and the estimator loop, against the f64 reference
+/// ([`e2e_trajectory`]), each tick's record sent on the live link ([`LinkOut`]), which host-sim
+/// checks against the same reference. Passes when the checks pass and every tick's record went
+/// out.
+#[cfg(feature = "link")]
+pub fn e2e() -> bool {
+    let Some(mut link) = LinkOut::take() else {
+        return false;
+    };
+    let passed = e2e_trajectory(&mut |_, report, estimator| link.send(report, estimator));
+    link.close("e2e", TICK_COUNT) && passed
+}
+
+/// Any robot end to end ([`crate::robot_check`]): the robot of the robot file the image was built
+/// from along its load path, each applied force printed and each tick's record sent on the live
+/// link, for host-sim to check against its own f64 solves of the same file. Passes when every tick
+/// is fresh with the applied force and every record went out.
+#[cfg(feature = "link")]
+pub fn robot() -> bool {
+    use crate::config::{MODEL_NODES, ROBOT_FILE, ROBOT_NAME, STEPS_PER_SECTION};
+    use crate::robot_check::{self, PATH_TICKS};
+
+    let model = match crate::config::model() {
+        Ok(model) => model,
+        Err(e) => {
+            hprintln!("model refused: {}", e);
+            return false;
+        }
+    };
+    let Some(peripherals) = cortex_m::Peripherals::take() else {
+        return false;
+    };
+    let Some(mut link) = LinkOut::take() else {
+        return false;
+    };
+    let counter = Counter::start(peripherals.SYST);
     hprintln!(
-        "e2e: live link: {} records, {} bytes on USART1, {} not sent",
-        records,
-        bytes,
-        unsent
+        "robot: {} ({}): {} nodes, {} steps per section, {} ticks; force tolerance {} uN",
+        ROBOT_FILE,
+        ROBOT_NAME,
+        MODEL_NODES,
+        STEPS_PER_SECTION,
+        PATH_TICKS,
+        micro(checks::FORCE_TOLERANCE_N, 1e6)
     );
-    passed && unsent == 0 && records as usize == TICK_COUNT
+    let clock = || counter::instructions(counter.ticks());
+    let result = robot_check::run_path(&model, &clock, |t, report, estimator| {
+        // The applied force in full (host-sim solves the robot file at it).
+        hprintln!(
+            "applied tick={} force_n={:?},{:?},{:?}",
+            t.tick,
+            t.applied_n.x,
+            t.applied_n.y,
+            t.applied_n.z
+        );
+        hprintln!(
+            "tick {:2} {:22} force_err_uN {:5} sweeps {} instructions {:7} {}",
+            t.tick,
+            status_name(&t.status),
+            micro(t.force_error_n, 1e6),
+            t.sweeps,
+            t.cost,
+            if t.passed { "pass" } else { "FAIL" }
+        );
+        link.send(report, estimator);
+    });
+    let Some(summary) = started(result) else {
+        return false;
+    };
+    hprintln!(
+        "worst force error {} uN, most sweeps {}, most instructions per warm tick {}",
+        micro(summary.worst_force_error_n, 1e6),
+        summary.max_sweeps,
+        summary.max_warm_cost
+    );
+    report_memory();
+    let sent = link.close("robot", PATH_TICKS);
+    hprintln!(
+        "robot: {} passed, {} failed",
+        summary.passed,
+        summary.failed
+    );
+    sent && summary.failed == 0 && summary.passed > 0
 }
 
 /// The recorded trajectory through the encoders and the estimator loop, against the f64 reference,
@@ -156,12 +269,8 @@ pub fn e2e_trajectory(tap: &mut dyn FnMut(&TickCheck, &ReplayReport, &BenchLoop<
         );
         tap(c, report, estimator);
     });
-    let summary = match result {
-        Ok(summary) => summary,
-        Err(e) => {
-            hprintln!("setup refused: {:?}", e);
-            return false;
-        }
+    let Some(summary) = started(result) else {
+        return false;
     };
     hprintln!(
         "worst tip error {} nm, worst force error {} uN, most sweeps {}, most instructions per warm tick {}, per sample {}",
@@ -202,12 +311,8 @@ pub fn golden() -> bool {
             if r.passed { "pass" } else { "FAIL" }
         );
     });
-    let summary = match result {
-        Ok(summary) => summary,
-        Err(e) => {
-            hprintln!("setup refused: {:?}", e);
-            return false;
-        }
+    let Some(summary) = started(result) else {
+        return false;
     };
     hprintln!(
         "worst tip error {} nm",

@@ -22,6 +22,16 @@ pub const SCALE_RANGE: f64 = 1e3;
 /// The largest friction coefficient searched.
 pub const MAX_FRICTION: f64 = 5.0;
 
+/// The largest standard deviation of a determined log-scaled parameter (E, line density, radius):
+/// 20 %.
+pub const UNDETERMINED_LOG_SD: f64 = 0.2;
+/// The largest standard deviation of a determined friction coefficient.
+pub const UNDETERMINED_FRICTION_SD: f64 = 0.1;
+/// The largest standard deviation of a determined base rotation, rad (1.1 degrees).
+pub const UNDETERMINED_ROTATION_SD_RAD: f64 = 0.02;
+/// The largest standard deviation of a determined base translation, in rod lengths.
+pub const UNDETERMINED_TRANSLATION_SD_PER_LENGTH: f64 = 0.05;
+
 /// What `--fit` may name (`E` is always fitted).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum FitParameter {
@@ -72,8 +82,9 @@ pub struct Coordinate {
     pub physical_lower: bool,
     /// The finite-difference step of the Jacobian, in the coordinate.
     pub step: f64,
-    /// A standard deviation above which the data do not determine it, in the coordinate: 1 in log
-    /// scale (a factor e), 1 for a friction coefficient, 0.5 rad, the rod's length.
+    /// A standard deviation above which the data do not determine it, in the coordinate: 0.2 in
+    /// log scale (20 %), 0.1 for a friction coefficient, 0.02 rad (1.1 degrees), a twentieth of
+    /// the rod's length. A calibration that uncertain is not one: its parameter gets no number.
     pub undetermined_above: f64,
 }
 
@@ -221,7 +232,7 @@ impl Layout {
             upper: Some(SCALE_RANGE.ln()),
             physical_lower: false,
             step: 1e-4,
-            undetermined_above: 1.0,
+            undetermined_above: UNDETERMINED_LOG_SD,
         };
         coordinates.push(log(name, unit, reference));
         let mut layout = Self {
@@ -284,7 +295,7 @@ impl Layout {
                 upper: Some(MAX_FRICTION),
                 physical_lower: true,
                 step: 1e-4,
-                undetermined_above: 1.0,
+                undetermined_above: UNDETERMINED_FRICTION_SD,
             });
         }
         if wants(FitParameter::BasePose) {
@@ -298,7 +309,7 @@ impl Layout {
                     upper: None,
                     physical_lower: false,
                     step: 1e-6,
-                    undetermined_above: 0.5,
+                    undetermined_above: UNDETERMINED_ROTATION_SD_RAD,
                 });
             }
             for axis in ["x", "y", "z"] {
@@ -310,7 +321,7 @@ impl Layout {
                     upper: None,
                     physical_lower: false,
                     step: 1e-6,
-                    undetermined_above: length_m,
+                    undetermined_above: length_m * UNDETERMINED_TRANSLATION_SD_PER_LENGTH,
                 });
             }
         }

@@ -6,6 +6,7 @@ use robot_link::Record;
 use crate::scene::SceneError;
 
 use super::format::v3;
+use super::table::Table;
 
 /// The largest tip error against the reference by default, m: the firmware's own end-to-end
 /// tolerance (`firmware/src/checks.rs`, `TIP_TOLERANCE_M`). Also each backbone point's.
@@ -55,71 +56,30 @@ impl Reference {
     /// # Errors
     /// A missing column, a cell that is not a number, no rows, or ticks out of order.
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim_start().starts_with('#') && !l.trim().is_empty());
-        let Some((_, header)) = lines.next() else {
-            return Err(SceneError::new(origin, "no header"));
-        };
-        let names: Vec<&str> = header.split(',').map(str::trim).collect();
-        let column = |name: &str| names.iter().position(|n| *n == name);
-        let need = |name: &str| {
-            column(name).ok_or_else(|| SceneError::new(origin, format!("no column \"{name}\"")))
-        };
-        let axes = |prefix: &str, suffix: &str| -> Result<[usize; 3], SceneError> {
-            Ok([
-                need(&format!("{prefix}x{suffix}"))?,
-                need(&format!("{prefix}y{suffix}"))?,
-                need(&format!("{prefix}z{suffix}"))?,
-            ])
-        };
-        let (tick_col, expected_col) = (need("tick")?, need("expected")?);
-        let (force_cols, tip_cols) = (axes("force_", "_n")?, axes("tip_", "_m")?);
+        let table = Table::parse(text, origin)?;
+        let (tick_col, expected_col) = (table.need("tick")?, table.need("expected")?);
+        let (force_cols, tip_cols) = (table.axes("force_", "_n")?, table.axes("tip_", "_m")?);
         let q_cols: Option<Vec<usize>> = ["tip_qw", "tip_qx", "tip_qy", "tip_qz"]
             .iter()
-            .map(|n| column(n))
+            .map(|n| table.column(n))
             .collect();
         let mut backbone_cols = Vec::new();
-        while column(&format!("backbone_{}_x_m", backbone_cols.len())).is_some() {
-            backbone_cols.push(axes(&format!("backbone_{}_", backbone_cols.len()), "_m")?);
+        while table
+            .column(&format!("backbone_{}_x_m", backbone_cols.len()))
+            .is_some()
+        {
+            backbone_cols.push(table.axes(&format!("backbone_{}_", backbone_cols.len()), "_m")?);
         }
         let mut ticks: Vec<ReferenceTick> = Vec::new();
-        for (index, line) in lines {
-            let at = format!("{origin}:{}", index + 1);
-            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-            let cell = |c: usize| {
-                cells
-                    .get(c)
-                    .copied()
-                    .ok_or_else(|| SceneError::new(&at, format!("no cell {}", c + 1)))
-            };
-            let number = |c: usize| -> Result<f64, SceneError> {
-                let text = cell(c)?;
-                text.parse::<f64>()
-                    .map_err(|e| SceneError::new(&at, format!("\"{text}\": {e}")))
-            };
-            let vector = |cols: [usize; 3]| -> Result<Vector3<f64>, SceneError> {
-                Ok(Vector3::new(
-                    number(cols[0])?,
-                    number(cols[1])?,
-                    number(cols[2])?,
-                ))
-            };
-            let tick_text = cell(tick_col)?;
-            let tick = tick_text
-                .parse::<u32>()
-                .map_err(|e| SceneError::new(&at, format!("tick \"{tick_text}\": {e}")))?;
-            if ticks.last().is_some_and(|t| t.tick >= tick) {
-                return Err(SceneError::new(&at, "ticks must increase"));
-            }
+        for row in table.rows() {
+            let tick = row.tick(tick_col, ticks.last().map(|t| t.tick))?;
             let tip_orientation = match &q_cols {
                 Some(c) => {
                     let q = nalgebra::Quaternion::new(
-                        number(c[0])?,
-                        number(c[1])?,
-                        number(c[2])?,
-                        number(c[3])?,
+                        row.number(c[0])?,
+                        row.number(c[1])?,
+                        row.number(c[2])?,
+                        row.number(c[3])?,
                     );
                     Some(UnitQuaternion::from_quaternion(q))
                 }
@@ -127,18 +87,18 @@ impl Reference {
             };
             ticks.push(ReferenceTick {
                 tick,
-                expected: cell(expected_col)?.to_string(),
-                force_n: vector(force_cols)?,
-                tip_m: vector(tip_cols)?,
+                expected: row.cell(expected_col)?.to_string(),
+                force_n: row.vector(force_cols)?,
+                tip_m: row.vector(tip_cols)?,
                 tip_orientation,
                 backbone_m: backbone_cols
                     .iter()
-                    .map(|c| vector(*c))
+                    .map(|c| row.vector(*c))
                     .collect::<Result<_, _>>()?,
             });
         }
         if ticks.is_empty() {
-            return Err(SceneError::new(origin, "no reference rows"));
+            return Err(table.error("no reference rows"));
         }
         Ok(Self { ticks })
     }
@@ -351,7 +311,11 @@ impl Checker {
                     .iter()
                     .zip(&truth.backbone_m)
                     .map(|(p, r)| (v3(*p) - r).norm())
-                    .fold(0.0, f64::max);
+                    // A NaN point is the worst, not skipped (`f64::max` would drop it).
+                    .fold(
+                        0.0,
+                        |worst, x| if x.is_nan() || x > worst { x } else { worst },
+                    );
                 if !within(errors.backbone_m, t.tip_m) {
                     why.push(format!(
                         "a backbone point {:.1} um off (limit {:.1})",

@@ -5,7 +5,8 @@
 //! The pieces are public so that tests run the same code: [`Monitor`] takes bytes and hands out
 //! [`Event`]s (`stream.rs`), [`record_line`] and [`csv_row`] format a record and [`figure`] turns
 //! it into the plot's figure (`format.rs`), [`Reference`] and [`Checker`] hold a stream to a
-//! reference tick by tick (`check.rs`). This file is the command.
+//! reference tick by tick (`check.rs`); `host-sim reference` makes a reference from a scene
+//! (`reference.rs`). This file is the command.
 
 use std::fmt::Write as _;
 use std::io::{self, BufWriter, Read, Write};
@@ -13,12 +14,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use crate::plots::{Figure, PlotSize, draw_figure};
+use crate::plots::{Figure, PlotFormat, PlotSize, draw_figure, ensure_font};
 use crate::scene::SceneError;
 
 mod check;
 mod format;
+pub mod reference;
 mod stream;
+mod table;
 
 pub use check::*;
 pub use format::*;
@@ -37,8 +40,8 @@ pub struct Args {
     /// The serial port's rate, baud (the firmware's `config::LINK_BAUD`).
     #[arg(long, default_value_t = 921_600, requires = "serial")]
     pub baud: u32,
-    /// Stop after this many records.
-    #[arg(long)]
+    /// Stop after this many records (at least 1).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub count: Option<u64>,
     /// Write every record to this CSV file as it arrives (columns below).
     #[arg(long)]
@@ -143,6 +146,11 @@ pub fn main(args: &Args) -> ExitCode {
 /// # Errors
 /// An input, output or reference that cannot be opened, read or written.
 pub fn run(args: &Args) -> Result<bool, SceneError> {
+    // A bad --plot path fails before anything is read, not at the first record.
+    if let Some(path) = &args.plot {
+        PlotFormat::of(path)?;
+        ensure_font()?;
+    }
     let mut checker = match &args.check_against {
         Some(path) => {
             let origin = path.display().to_string();
@@ -269,7 +277,8 @@ pub fn run(args: &Args) -> Result<bool, SceneError> {
     let _ = writeln!(
         stdout,
         "monitor check: {} passed, {} failed, {} reference ticks without a record, {} frames refused; \
-         worst tip error {:.1} um ({:.2} sigma), force {:.3} mN, tip frame {:.4} mrad, \
+         worst of the passing records: tip error {:.1} um ({:.2} sigma), force {:.3} mN, tip \
+         frame {:.4} mrad, \
          backbone {:.1} um: {}",
         checker.passed,
         checker.failed,

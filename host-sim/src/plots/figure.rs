@@ -368,7 +368,7 @@ fn legend_box(
     if !figure.disks_m.is_empty() {
         entries.push((
             line(GUIDE.stroke_width(thin)),
-            "base plate and guides, at the holes' radius".into(),
+            "base plate and guides".into(),
         ));
     }
     if !figure.cables.is_empty() {

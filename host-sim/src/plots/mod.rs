@@ -25,7 +25,7 @@ mod raster;
 mod validation;
 
 pub use figure::{ELLIPSE_RGB, Figure, OBSERVED_RGB, TendonPath, draw_figure, tendon_rgb};
-pub use raster::PNG_DPI;
+pub use raster::{PNG_DPI, PNG_PIXELS_PER_METRE};
 pub use validation::draw_validation;
 
 /// The family name plot text is drawn in, once [`ensure_font`] has registered it.
@@ -206,7 +206,7 @@ fn write(
     // The physical size, so that a point is a point wherever the SVG is placed.
     let svg = svg.replacen(
         &format!("width=\"{}\" height=\"{}\"", units.0, units.1),
-        &format!("width=\"{width_in}in\" height=\"{height_in}in\""),
+        &format!("width=\"{width_in:.3}in\" height=\"{height_in:.3}in\""),
         1,
     );
     match format {

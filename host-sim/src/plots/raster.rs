@@ -57,7 +57,41 @@ pub(super) fn write_png(svg: &str, path: &Path) -> Result<(), SceneError> {
         Transform::from_scale(zoom, zoom),
         &mut pixmap.as_mut(),
     );
-    pixmap
-        .save_png(path)
-        .map_err(|e| SceneError::new(path.display().to_string(), format!("cannot write: {e}")))
+    write_with_resolution(&pixmap, path)
+}
+
+/// Pixels per metre at [`PNG_DPI`], as a PNG's `pHYs` chunk states it: 11 811.
+pub const PNG_PIXELS_PER_METRE: u32 = (PNG_DPI / 0.0254 + 0.5) as u32;
+
+/// The pixmap as an 8-bit RGBA PNG that says its print resolution (`pHYs`), so that a layout
+/// program places it at its size in inches rather than at 72 or 96 dpi.
+fn write_with_resolution(pixmap: &Pixmap, path: &Path) -> Result<(), SceneError> {
+    let cannot = |e: &dyn std::fmt::Display| {
+        SceneError::new(path.display().to_string(), format!("cannot write: {e}"))
+    };
+    let file = std::fs::File::create(path).map_err(|e| cannot(&e))?;
+    let mut encoder = png::Encoder::new(
+        std::io::BufWriter::new(file),
+        pixmap.width(),
+        pixmap.height(),
+    );
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_pixel_dims(Some(png::PixelDimensions {
+        xppu: PNG_PIXELS_PER_METRE,
+        yppu: PNG_PIXELS_PER_METRE,
+        unit: png::Unit::Meter,
+    }));
+    // tiny-skia keeps premultiplied alpha; a PNG's is straight.
+    let data: Vec<u8> = pixmap
+        .pixels()
+        .iter()
+        .flat_map(|p| {
+            let c = p.demultiply();
+            [c.red(), c.green(), c.blue(), c.alpha()]
+        })
+        .collect();
+    let mut writer = encoder.write_header().map_err(|e| cannot(&e))?;
+    writer.write_image_data(&data).map_err(|e| cannot(&e))?;
+    writer.finish().map_err(|e| cannot(&e))
 }

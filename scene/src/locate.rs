@@ -18,7 +18,7 @@ use super::SceneError;
 const ARRAY_TABLES: [&str; 4] = ["section", "cable", "tendon", "load"];
 
 /// The tables a scene has at most once: `[name]`.
-const SINGLE_TABLES: [&str; 8] = [
+const SINGLE_TABLES: [&str; 10] = [
     "base",
     "guides",
     "actuation",
@@ -27,6 +27,8 @@ const SINGLE_TABLES: [&str; 8] = [
     "solver",
     "estimate",
     "estimate.tendons",
+    "drive",
+    "controller",
 ];
 
 /// The line (from 1) of byte `offset` in `text`, and that line trimmed.
@@ -53,8 +55,8 @@ fn steps(path: &str) -> Vec<(&str, Option<usize>)> {
 }
 
 /// The byte offset of the deepest part of `path` written in the file: the key itself, else the
-/// table (or array item) that would hold it. `None` when not even its first key is written, or the
-/// text does not parse.
+/// table (or array item) that would hold it. `None` when not even its first key is written, when
+/// the path names an array of tables without an item, or the text does not parse.
 fn offset_of(text: &str, path: &str) -> Option<usize> {
     let root = DeTable::parse(text).ok()?;
     let mut table: &DeTable<'_> = root.get_ref();
@@ -66,12 +68,18 @@ fn offset_of(text: &str, path: &str) -> Option<usize> {
         // The key's own position (`[[tendon]]` items carry no key: the header's span is the value's).
         found = Some(k.span().start);
         let mut value: &Spanned<DeValue<'_>> = value;
-        if let (DeValue::Array(items), Some(i)) = (value.get_ref(), index) {
-            let Some(item) = items.get(i) else {
-                return found;
-            };
-            found = Some(item.span().start);
-            value = item;
+        match (value.get_ref(), index) {
+            (DeValue::Array(items), Some(i)) => {
+                let Some(item) = items.get(i) else {
+                    return found;
+                };
+                found = Some(item.span().start);
+                value = item;
+            }
+            // A path into an array of tables without an index (`cable.end_m`) names no item: its
+            // first table's line would blame the wrong one, so the error keeps no place.
+            (DeValue::Array(_), None) if ARRAY_TABLES.contains(&key) => return None,
+            _ => {}
         }
         match value.get_ref() {
             DeValue::Table(inner) => table = inner,

@@ -1,8 +1,8 @@
 //! Scene files (TOML): the rod and its sections, guides, cables, tendons and their actuation, loads,
 //! gravity, output points, solver and estimator settings. Keys carry their units; unknown keys are
 //! refused, so a typo is an error and not a silently ignored setting. `host-sim/SCENES.md` documents
-//! every key. Every refusal names its line (`scene/locate.rs`), and numbers no robot has are
-//! refused or warned about with the likely unit slip (`scene/plausible.rs`).
+//! every key. Every refusal names its line (`locate.rs`), and numbers no robot has are
+//! refused or warned about with the likely unit slip (`plausible.rs`).
 //!
 //! A scene becomes a [`model_core::Rod`] in SI units through [`Scene::rod`], its tendons a
 //! [`model_core::Tendons`] checked against the model through [`Scene::tendon_set`], their actuation
@@ -26,8 +26,11 @@ use model_core::{
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
+mod drive;
 mod locate;
 mod plausible;
+
+pub use drive::{ControllerSpec, DriveSpec};
 
 pub use locate::locate;
 
@@ -185,10 +188,19 @@ pub struct Scene {
     /// Inverse settings.
     #[serde(default)]
     pub estimate: EstimateSpec,
+    /// The spools, gearheads, sensors and steppers (the firmware's; `drive.rs`).
+    #[serde(default)]
+    pub drive: Option<DriveSpec>,
+    /// The estimator loop on the MCU (the firmware's; `drive.rs`).
+    #[serde(default)]
+    pub controller: Option<ControllerSpec>,
 }
 
+/// Standard gravity, m/s^2: a scene's gravity when it gives none, along global -y.
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
+
 fn default_gravity() -> [f64; 3] {
-    [0.0, -model_checks::reference::GRAVITY_M_S2, 0.0]
+    [0.0, -STANDARD_GRAVITY_M_S2, 0.0]
 }
 
 /// The clamp: position and the frame's local x and z (tangent) axes in global coordinates.
@@ -631,6 +643,7 @@ impl Scene {
             toml::from_str(text).map_err(|e| locate::explain_parse(&e, text, origin))?;
         scene
             .check_sizes()
+            .and_then(|()| scene.check_drive())
             .and_then(|()| scene.check_plausible())
             .map_err(|e| locate(e, text, origin))?;
         Ok(scene)
@@ -1291,9 +1304,32 @@ impl Scene {
             })
             .map_err(|_| cap(&format!("load[{i}]")))?;
         }
-        rod.validate()
-            .map_err(|e| SceneError::new(field_of(&e), e.to_string()))?;
+        rod.validate().map_err(|e| Self::which_item(&rod, &e))?;
         Ok(rod)
+    }
+
+    /// The scene field of a model-core validation error. An error about a cable or a point load
+    /// names no item: the item is the first whose rod, with the items before it, fails the same
+    /// way, so that the error points at its own `[[cable]]` or `[[load]]` table, not the first.
+    fn which_item(rod: &Rod<f64>, e: &model_core::ModelError) -> SceneError {
+        let field = field_of(e);
+        let failing = |keep: usize| {
+            let mut prefix = rod.clone();
+            match field {
+                "cable" => prefix.cables.truncate(keep),
+                _ => prefix.loads.truncate(keep),
+            }
+            prefix.validate().err() == Some(*e)
+        };
+        let count = match field {
+            "cable" => rod.cables.len(),
+            "load" => rod.loads.len(),
+            _ => 0,
+        };
+        match (1..=count).find(|&n| failing(n)) {
+            Some(n) => SceneError::new(format!("{field}[{}]", n - 1), e.to_string()),
+            None => SceneError::new(field, e.to_string()),
+        }
     }
 
     fn base_orientation(&self) -> Result<Matrix3<f64>, SceneError> {

@@ -2,15 +2,16 @@
 //! a diameter in millimetres, a mass in grams, an angle in radians). Each check names the key, the
 //! value and the slip that would make it plausible.
 //!
-//! Two kinds: a value for which the rod model means nothing (a modulus below 1 MPa or above 2 TPa, a
+//! Two kinds: a value for which the rod model means nothing (a modulus below 1 MPa or above 1.2 TPa, a
 //! cross-section at least half as wide as the rod is long: not a slender rod) is refused; a value
 //! that is merely far outside what such robots have (a 12 m section, a 1 kg guide) is warned about,
 //! and the run goes on with it. host-sim/SCENES.md lists them.
 
 use super::{Scene, SceneError};
 
-/// Young's and shear moduli a backbone may have, Pa: below the softest elastomer, above diamond.
-const MODULUS_PA: (f64, f64) = (1e6, 2e12);
+/// Young's and shear moduli a backbone may have, Pa: from below the softest elastomer to diamond's
+/// (1.05-1.2 TPa).
+const MODULUS_PA: (f64, f64) = (1e6, 1.2e12);
 
 /// Longest plausible section, m.
 const SECTION_LENGTH_M: f64 = 10.0;
@@ -28,6 +29,16 @@ const GUIDE_MASS_KG: f64 = 1.0;
 const GUIDE_THICKNESS_M: f64 = 0.05;
 /// Largest plausible gravity, m/s^2 (ten times the Earth's).
 const GRAVITY_M_S2: f64 = 100.0;
+
+/// A number as a reader takes it in: plain between 0.001 and 10 million, else with an exponent
+/// (`1.5e12`, not `1500000000000`).
+fn shown(x: f64) -> String {
+    if (1e-3..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
 
 /// The first of `slips` (a factor and how the value reads with it, e.g. `(1e9, "e9 Pa", "GPa")`)
 /// that brings `x` into `lo..=hi`, as advice: ` Did you mean 60e9 Pa (60 GPa)?`.
@@ -66,7 +77,7 @@ type GuideCheck<'a> = (
 );
 
 impl Scene {
-    /// The refusals: a modulus outside 1 MPa..2 TPa, a diameter at least half the rod's length.
+    /// The refusals: a modulus outside 1 MPa..1.2 TPa, a diameter at least half the rod's length.
     pub(super) fn check_plausible(&self) -> Result<(), SceneError> {
         let length_m: f64 = self.sections.iter().map(|s| s.length_m).sum();
         for (i, s) in self.sections.iter().enumerate() {
@@ -82,20 +93,25 @@ impl Scene {
                     let (lo, hi) = MODULUS_PA;
                     let field = format!("section[{i}].material.{key}");
                     if x < lo {
+                        // Only a slip that lands on a backbone material (10 MPa up) is advice.
                         let advice =
-                            slip(x, lo, hi, &[(1e9, "e9 Pa", "GPa"), (1e6, "e6 Pa", "MPa")]);
+                            slip(x, 1e7, hi, &[(1e9, "e9 Pa", "GPa"), (1e6, "e6 Pa", "MPa")]);
                         return Err(SceneError::new(
                             field,
                             format!(
-                                "{x} Pa is below 1 MPa, softer than any backbone material (the \
-                                 unit is Pa).{advice}"
+                                "{} Pa is below 1 MPa, softer than any backbone material (the \
+                                 unit is Pa).{advice}",
+                                shown(x)
                             ),
                         ));
                     }
                     if x > hi {
                         return Err(SceneError::new(
                             field,
-                            format!("{x} Pa is above 2 TPa, stiffer than diamond (the unit is Pa)"),
+                            format!(
+                                "{} Pa is above 1.2 TPa, stiffer than diamond (the unit is Pa)",
+                                shown(x)
+                            ),
                         ));
                     }
                 }
