@@ -39,7 +39,21 @@ fn robot_file(
     default: &str,
 ) -> Result<(String, String), String> {
     println!("cargo:rerun-if-env-changed={variable}");
-    let robot = env::var(variable).unwrap_or_else(|_| default.into());
+    let robot = match env::var_os(variable) {
+        None => default.to_string(),
+        Some(given) => match given.into_string() {
+            Ok(given) if !given.trim().is_empty() => given,
+            _ => {
+                return Err(format!(
+                    "{variable} is set but names no file (empty, or not UTF-8): unset it for \
+                     {default}, or give the robot file's path"
+                ));
+            }
+        },
+    };
+    if robot != default {
+        println!("cargo:warning=building for the robot of {robot} ({variable}), not {default}");
+    }
     let path = manifest.join(&robot);
     println!("cargo:rerun-if-changed={}", path.display());
     let text = fs::read_to_string(&path)
@@ -47,7 +61,15 @@ fn robot_file(
     Ok((robot, text))
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+fn main() {
+    // The robot file's errors as host-sim says them, one per line, without a Debug dump around them.
+    if let Err(e) = run() {
+        eprintln!("{e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     println!("cargo:rerun-if-changed=build.rs");
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR")?);
     let out = PathBuf::from(env::var("OUT_DIR")?);
@@ -84,6 +106,12 @@ fn generate(origin: &str, text: &str) -> Result<String, String> {
         ));
     };
     let (rod, model) = mcu_rod(origin, text, &scene)?;
+    if !scene.tendons.is_empty() {
+        println!(
+            "cargo:warning={origin}: its [[tendon]] tables are not read by the cable estimator \
+             (a tendon robot's file goes in TENDON_ROBOT)"
+        );
+    }
     if rod.cables.len() != CABLE_COUNT {
         return Err(format!(
             "{origin}: {} [[cable]] tables; the firmware reads exactly {CABLE_COUNT} cables \
@@ -101,11 +129,11 @@ fn generate(origin: &str, text: &str) -> Result<String, String> {
         writeln!(g, "pub const CABLE_COUNT: usize = {CABLE_COUNT};")?;
         writeln!(g, "/// Length of the rod, m: its sections' together.")?;
         writeln!(g, "pub const ROD_LENGTH_M: f64 = {};", lit(rod.length_m()))?;
-        write_plan(&mut g, origin, &rod, &model, "PLAN_NODES")?;
         write_push(&mut g, "push_robot", &rod)?;
         write_drive(&mut g, origin, drive, controller)
     })();
     written.map_err(|e| e.to_string())?;
+    write_plan(&mut g, &rod, &model, "PLAN_NODES").map_err(|e| format!("{origin}: {e}"))?;
     Ok(g)
 }
 
@@ -121,6 +149,14 @@ fn generate_tendon(origin: &str, text: &str) -> Result<String, String> {
         ));
     };
     let (rod, model) = mcu_rod(origin, text, &scene)?;
+    if !scene.cables.is_empty() {
+        println!(
+            "cargo:warning={origin}: its [[cable]] tables are not read by the tendon image (a \
+             cable robot's file goes in ROBOT)"
+        );
+    }
+    // Checked against the guides as host-sim checks them (each must end at a guide's centre).
+    scene.tendon_set(&model).map_err(located)?;
     let tendons = scene.tendon_specs().map_err(located)?;
     if tendons.len() != TENDON_COUNT {
         return Err(format!(
@@ -129,8 +165,6 @@ fn generate_tendon(origin: &str, text: &str) -> Result<String, String> {
             tendons.len()
         ));
     }
-    model_core::Tendons::new(&model, &tendons)
-        .map_err(|e| format!("{origin}: the model refuses the tendons: {e:?}"))?;
     let mut g = String::new();
     let written = (|| -> std::fmt::Result {
         header(&mut g, origin, &scene, "TENDON_")?;
@@ -142,7 +176,6 @@ fn generate_tendon(origin: &str, text: &str) -> Result<String, String> {
             "pub const STEPS_PER_SECTION: u16 = {};",
             controller.steps_per_section
         )?;
-        write_plan(&mut g, origin, &rod, &model, "TENDON_NODES")?;
         write_push(&mut g, "push_tendon_robot", &rod)?;
         let specs = tendons.iter().map(|k| {
             format!(
@@ -169,15 +202,20 @@ fn generate_tendon(origin: &str, text: &str) -> Result<String, String> {
         )
     })();
     written.map_err(|e| e.to_string())?;
+    write_plan(&mut g, &rod, &model, "TENDON_NODES").map_err(|e| format!("{origin}: {e}"))?;
     Ok(g)
 }
 
 /// A robot's model in f64, at model-core's largest capacity.
 type HostModel = Model<f64, Quaternion<f64>>;
 
-/// The scene's rod at the controller's steps, and its model in f64 (which checks it).
+/// The scene's rod at the controller's steps, and its model in f64 (which checks it). The file's
+/// warnings (host-sim's: unusual values, the likely unit slip) become the build's.
 fn mcu_rod(origin: &str, text: &str, scene: &Scene) -> Result<(Rod<f64>, HostModel), String> {
     let located = |e: robot_scene::SceneError| robot_scene::locate(e, text, origin).to_string();
+    for warning in scene.warnings() {
+        println!("cargo:warning={}", located(warning));
+    }
     let rod = scene
         .at_controller_steps()
         .and_then(|s| s.rod())
@@ -199,42 +237,75 @@ fn header(g: &mut String, origin: &str, scene: &Scene, prefix: &str) -> std::fmt
     writeln!(g, "pub const {prefix}ROBOT_NAME: &str = {:?};", scene.name)
 }
 
-/// The plan's node count (the image's model capacity, `name`) and model-core's capacities, each
-/// named with the robot's value.
-fn write_plan(
-    g: &mut String,
-    origin: &str,
-    rod: &Rod<f64>,
-    model: &HostModel,
-    name: &str,
-) -> std::fmt::Result {
-    writeln!(
-        g,
-        "/// Nodes of the robot's plan: the estimator model's capacity."
-    )?;
-    writeln!(
-        g,
-        "pub const {name}: usize = {};",
-        model.plan().interval_count() + 1
-    )?;
-    for (count, what, limit) in [
-        (rod.sections.len(), "sections", "model_core::MAX_SECTIONS"),
-        (rod.guides.len(), "guides", "model_core::MAX_GUIDES"),
-        (
-            rod.loads.len(),
-            "point loads",
-            "model_core::MAX_POINT_LOADS",
-        ),
-    ] {
-        if count > 0 {
-            writeln!(
-                g,
-                "const _: () = assert!({count} <= {limit}, \"{origin}: {count} {what}; more than \
-                 {limit} (the firmware's capacity)\");"
-            )?;
-        }
+/// The plan's node count: the image's model capacity, `name`. The firmware's plan is f32's, which
+/// merges breakpoints closer than a millionth of the rod as f64's does but rounds them first: the
+/// larger of the two counts. (model-core's other capacities, guides, sections, cables, loads, are
+/// the parser's: a robot beyond one is refused with the key and the limit.)
+fn write_plan(g: &mut String, rod: &Rod<f64>, model: &HostModel, name: &str) -> Result<(), String> {
+    let nodes_f32 = Model::<f32, Quaternion<f32>>::new(in_f32(rod))
+        .map_err(|e| format!("the model refuses the robot in f32: {e:?}"))?
+        .plan()
+        .interval_count()
+        + 1;
+    let nodes = (model.plan().interval_count() + 1).max(nodes_f32);
+    let written = (|| -> std::fmt::Result {
+        writeln!(
+            g,
+            "/// Nodes of the robot's plan: the estimator model's capacity."
+        )?;
+        writeln!(g, "pub const {name}: usize = {nodes};")
+    })();
+    written.map_err(|e| e.to_string())
+}
+
+/// The rod rounded to f32, field by field, as the firmware's `T::lit` rounds it.
+fn in_f32(rod: &Rod<f64>) -> Rod<f32> {
+    let v3 = |v: &nalgebra::Vector3<f64>| v.map(|x| x as f32);
+    let mut out = Rod::<f32>::new();
+    out.gravity_m_s2 = v3(&rod.gravity_m_s2);
+    out.base_position_m = v3(&rod.base_position_m);
+    out.base_orientation = rod.base_orientation.map(|x| x as f32);
+    out.strain_model = rod.strain_model;
+    out.guide_mass = rod.guide_mass;
+    for s in &rod.sections {
+        let _ = out.sections.push(model_core::Section {
+            length_m: s.length_m as f32,
+            stiffness: model_core::Stiffness {
+                bending_torsion_nm2: v3(&s.stiffness.bending_torsion_nm2),
+                shear_axial_n: v3(&s.stiffness.shear_axial_n),
+            },
+            line_density_kg_per_m: s.line_density_kg_per_m as f32,
+            steps: s.steps,
+        });
     }
-    Ok(())
+    for q in &rod.guides {
+        let _ = out.guides.push(model_core::Guide {
+            s_m: q.s_m as f32,
+            thickness_m: q.thickness_m as f32,
+            mass_kg: q.mass_kg as f32,
+        });
+    }
+    for c in &rod.cables {
+        let _ = out.cables.push(model_core::Cable {
+            hole_m: c.hole_m.map(|x| x as f32),
+            end_m: c.end_m as f32,
+        });
+    }
+    for l in &rod.loads {
+        let _ = out.loads.push(model_core::PointLoad {
+            s_m: l.s_m as f32,
+            mass_kg: l.mass_kg as f32,
+            force_n: v3(&l.force_n),
+            moment_nm: v3(&l.moment_nm),
+        });
+    }
+    out
+}
+
+/// `text` as a string literal for a generated `assert!`: escaped, and its braces doubled (the
+/// message is a format string), whatever the robot file's path holds.
+fn message(text: &str) -> String {
+    format!("{:?}", text.replace('{', "{{").replace('}', "}}"))
 }
 
 /// A float as a Rust literal that reads back to the same `f64`.
@@ -359,8 +430,12 @@ fn write_drive(
     writeln!(g, "pub const GEAR_RATIO: u32 = {};", drive.gear_ratio)?;
     writeln!(
         g,
-        "const _: () = assert!({c} == crate::encoder::as5047p::COUNTS_PER_TURN, \"{origin}: encoder_counts_per_turn = {c}; \
-         the firmware's sensor driver (AS5047P) counts COUNTS_PER_TURN (16384) a turn\");",
+        "const _: () = assert!({c} == crate::encoder::as5047p::COUNTS_PER_TURN, {});",
+        message(&format!(
+            "{origin}: encoder_counts_per_turn = {}; the firmware's sensor driver (AS5047P) \
+             counts COUNTS_PER_TURN (16384) a turn",
+            drive.encoder_counts_per_turn
+        )),
         c = drive.encoder_counts_per_turn
     )?;
     writeln!(g, "/// Full steps per motor turn.")?;

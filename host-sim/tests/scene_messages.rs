@@ -274,3 +274,21 @@ fn a_bad_cable_or_load_is_located_at_its_own_table_not_the_first() {
     let e = locate(SceneError::new("cable.end_m", "test"), &text, "robot.toml");
     assert_eq!(e.field, "cable.end_m");
 }
+
+#[test]
+fn a_value_that_is_not_finite_is_refused_not_warned_about() {
+    for (from, to, key) in [
+        ("length_m = 0.39", "length_m = inf", "section[0].length_m"),
+        ("radius_m = 0.01", "radius_m = inf", "cable[0].radius_m"),
+    ] {
+        let text = shipped("bench_3d_cables.toml").replacen(from, to, 1);
+        let scene = Scene::parse(&text, "robot.toml").expect("read; refused when the rod is built");
+        let warnings = scene.warnings();
+        assert!(
+            warnings.iter().all(|w| !w.field.contains(key)),
+            "{to}: {warnings:?}"
+        );
+        let e = scene.rod().expect_err(to);
+        assert!(e.field.contains(key), "{to}: {e}");
+    }
+}

@@ -53,6 +53,10 @@ pub struct ControllerSpec {
 /// Fewest sensor counts per turn a cable length can be read from.
 const MIN_COUNTS_PER_TURN: u32 = 4;
 
+/// Most sensor turns per spool turn: far beyond any gearhead, and small enough that the counts of
+/// a spool turn stay a 32-bit number with a 65 536-count sensor.
+pub const MAX_GEAR_RATIO: u32 = 10_000;
+
 impl Scene {
     /// The `[drive]` and `[controller]` tables, when present: positive, finite values, one entry
     /// per `[[cable]]` in each list, a sampling rate that is a whole multiple of the loop rate and
@@ -91,6 +95,15 @@ impl Scene {
             }
         };
         at_least("gear_ratio", drive.gear_ratio, 1)?;
+        if drive.gear_ratio > MAX_GEAR_RATIO {
+            return Err(SceneError::new(
+                "drive.gear_ratio",
+                format!(
+                    "{}: at most {MAX_GEAR_RATIO} (sensor turns per spool turn)",
+                    drive.gear_ratio
+                ),
+            ));
+        }
         at_least(
             "encoder_counts_per_turn",
             drive.encoder_counts_per_turn,
@@ -241,6 +254,7 @@ steps_per_section = 20
             ("[0.389, 0.377]", "[0.389]", "drive.home_lengths_m"),
             ("[16380, -100]", "[1, 2, 3]", "drive.zero_offset_counts"),
             ("gear_ratio = 8", "gear_ratio = 0", "drive.gear_ratio"),
+            ("gear_ratio = 8", "gear_ratio = 20000", "drive.gear_ratio"),
             (
                 "spool_radius_m = 0.005",
                 "spool_radius_m = -0.005",
@@ -273,6 +287,41 @@ steps_per_section = 20
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_spool_radius_in_millimetres_is_warned_about_with_the_slip() -> Result<(), SceneError> {
+        let scene = Scene::parse(
+            &BENCH.replace("spool_radius_m = 0.005", "spool_radius_m = 5"),
+            "b",
+        )?;
+        let warnings = scene.warnings();
+        assert!(
+            warnings.iter().any(|w| w.field == "drive.spool_radius_m"
+                && w.reason.contains("Did you mean 5e-3 m (5 mm)?")),
+            "{warnings:?}"
+        );
+        assert!(Scene::parse(BENCH, "b")?.warnings().is_empty());
+        Ok(())
+    }
+
+    #[test]
+    fn more_cables_than_model_core_holds_are_refused_naming_the_limit() {
+        let seven = "[[cable]]\nangle_deg = 0\nradius_m = 0.01\n".repeat(7);
+        let text = BENCH
+            .split("[[cable]]")
+            .next()
+            .unwrap_or_default()
+            .to_string()
+            + &seven;
+        match Scene::parse(&text, "b") {
+            Ok(_) => panic!("seven cables accepted"),
+            Err(e) => assert!(
+                e.to_string()
+                    .contains("at most 6 (model-core's MAX_CABLES)"),
+                "{e}"
+            ),
         }
     }
 

@@ -19,9 +19,9 @@ use std::fmt;
 use std::path::Path;
 
 use model_core::{
-    Attitude, Cable, CrossSection, Guide, GuideMass, MAX_GUIDES, MAX_SECTIONS, MAX_TENDONS,
-    Material, Model, PointLoad, Rod, Section, ShootingSettings, Sliding, Stiffness, StrainModel,
-    Tendon, TendonInverseSettings, Tendons, TipLoad,
+    Attitude, Cable, CrossSection, Guide, GuideMass, MAX_CABLES, MAX_GUIDES, MAX_POINT_LOADS,
+    MAX_SECTIONS, MAX_TENDONS, Material, Model, PointLoad, Rod, Section, ShootingSettings, Sliding,
+    Stiffness, StrainModel, Tendon, TendonInverseSettings, Tendons, TipLoad,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
@@ -665,6 +665,17 @@ impl Scene {
         self.total_steps()?;
         if let Some(guides) = &self.guides {
             guides.count()?;
+        }
+        for (key, count, limit, name) in [
+            ("cable", self.cables.len(), MAX_CABLES, "MAX_CABLES"),
+            ("load", self.loads.len(), MAX_POINT_LOADS, "MAX_POINT_LOADS"),
+        ] {
+            if count > limit {
+                return Err(SceneError::new(
+                    key,
+                    format!("{count} [[{key}]] tables; at most {limit} (model-core's {name})"),
+                ));
+            }
         }
         self.output_point_count()?;
         self.check_tendon_counts()?;

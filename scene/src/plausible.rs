@@ -29,6 +29,8 @@ const GUIDE_MASS_KG: f64 = 1.0;
 const GUIDE_THICKNESS_M: f64 = 0.05;
 /// Largest plausible gravity, m/s^2 (ten times the Earth's).
 const GRAVITY_M_S2: f64 = 100.0;
+/// Spool radii a cable drive has, m: 0.5 mm to 10 cm.
+const SPOOL_RADIUS_M: (f64, f64) = (5e-4, 0.1);
 
 /// A number as a reader takes it in: plain between 0.001 and 10 million, else with an exponent
 /// (`1.5e12`, not `1500000000000`).
@@ -137,12 +139,13 @@ impl Scene {
     }
 
     /// The warnings: values far outside what continuum robots have, each with the key, the value
-    /// and the likely slip. The run goes on with them.
+    /// and the likely slip. The run goes on with them. A value that is not finite is not warned
+    /// about: building the rod refuses it, naming the key.
     pub fn warnings(&self) -> Vec<SceneError> {
         let mut out = Vec::new();
         let mut warn = |field: String, reason: String| out.push(SceneError::new(field, reason));
         let g = self.gravity_m_s2.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if g > GRAVITY_M_S2 {
+        if g.is_finite() && g > GRAVITY_M_S2 {
             warn(
                 "gravity_m_s2".into(),
                 format!(
@@ -151,8 +154,22 @@ impl Scene {
                 ),
             );
         }
+        if let Some(drive) = &self.drive {
+            let (lo, hi) = SPOOL_RADIUS_M;
+            let x = drive.spool_radius_m;
+            if x.is_finite() && !(lo..=hi).contains(&x) {
+                warn(
+                    "drive.spool_radius_m".into(),
+                    format!(
+                        "{x} m is outside {lo}..{hi} m, the spools cable drives have (the unit is \
+                         m).{}",
+                        length_slip(x, lo, hi)
+                    ),
+                );
+            }
+        }
         for (i, s) in self.sections.iter().enumerate() {
-            if s.length_m > SECTION_LENGTH_M {
+            if s.length_m.is_finite() && s.length_m > SECTION_LENGTH_M {
                 warn(
                     format!("section[{i}].length_m"),
                     format!(
@@ -163,6 +180,7 @@ impl Scene {
                 );
             }
             if let Some(c) = &s.cross_section
+                && c.diameter_m.is_finite()
                 && c.diameter_m > DIAMETER_M
             {
                 warn(
@@ -175,6 +193,7 @@ impl Scene {
                 );
             }
             if let Some(x) = s.line_density_kg_per_m
+                && x.is_finite()
                 && x > LINE_DENSITY_KG_PER_M
             {
                 warn(
@@ -186,6 +205,7 @@ impl Scene {
                 );
             }
             if let Some(x) = s.density_kg_m3
+                && x.is_finite()
                 && x > 0.0
                 && !(DENSITY_KG_M3.0..=DENSITY_KG_M3.1).contains(&x)
             {
@@ -217,7 +237,7 @@ impl Scene {
             ),
         ] {
             for (i, (_, r)) in holes.iter().enumerate() {
-                if *r > HOLE_RADIUS_M {
+                if r.is_finite() && *r > HOLE_RADIUS_M {
                     warn(
                         format!("{kind}[{i}].radius_m"),
                         format!(
@@ -293,7 +313,7 @@ impl Scene {
                     .enumerate()
                     .map(|(i, x)| (format!("guides.{list_key}[{i}]"), *x))
                     .chain(core::iter::once((format!("guides.{key}"), value)));
-                for (field, x) in values.filter(|(_, x)| *x > limit) {
+                for (field, x) in values.filter(|(_, x)| x.is_finite() && *x > limit) {
                     warn(field, words(x));
                 }
             }

@@ -60,6 +60,12 @@ pub static COMMANDED_STEPS: [AtomicI32; 3] = [const { AtomicI32::new(0) }; 3];
 /// Core clock, Hz.
 const SYSCLK_HZ: u32 = 168_000_000;
 
+const _: () = assert!(
+    tasks::systick_can_sample(SYSCLK_HZ, SAMPLE_RATE_HZ),
+    "the robot file's controller.sample_rate_hz: SysTick cannot interrupt at it on the 168 MHz \
+     core clock (it must divide the clock and be at least 11 Hz)"
+);
+
 /// Ends the run after a failure: breakpoint under a debugger, reset otherwise.
 fn stop() -> ! {
     if DCB::is_debugger_attached() {

@@ -185,7 +185,10 @@ pub fn robot() -> bool {
         MODEL_NODES,
         STEPS_PER_SECTION,
         PATH_TICKS,
-        micro(checks::FORCE_TOLERANCE_N, 1e6)
+        micro(
+            robot_check::force_tolerance_n(f64::from(model.moment_scale_nm() / model.length_m())),
+            1e6
+        )
     );
     let clock = || counter::instructions(counter.ticks());
     let result = robot_check::run_path(&model, &clock, |t, report, estimator| {
@@ -523,6 +526,12 @@ pub type ReplaySample = Sample<SampleError<ReplayError>>;
 
 /// Core clock under QEMU (netduinoplus2: `cpuclk` 168 MHz), Hz.
 pub const QEMU_CORE_CLOCK_HZ: u32 = 168_000_000;
+
+const _: () = assert!(
+    tasks::systick_can_sample(QEMU_CORE_CLOCK_HZ, SAMPLE_RATE_HZ),
+    "the robot file's controller.sample_rate_hz: SysTick cannot interrupt at it on the 168 MHz \
+     core clock (it must divide the clock and be at least 11 Hz)"
+);
 
 /// Samples the estimator image holds the bench at home before the recording plays: the cold first
 /// estimate (about 120 ms of QEMU's virtual time) runs while the bench rests, as after power-up.

@@ -20,6 +20,15 @@ pub const fn systick_reload(core_clock_hz: u32, sample_rate_hz: u32) -> u32 {
     core_clock_hz / sample_rate_hz - 1
 }
 
+/// Whether SysTick can interrupt at exactly `sample_rate_hz` on `core_clock_hz`: the rate divides
+/// the clock, and one period fits the 24-bit reload (at 168 MHz, 11 Hz and up). The images assert
+/// it for the robot file's `controller.sample_rate_hz` at their clock.
+pub const fn systick_can_sample(core_clock_hz: u32, sample_rate_hz: u32) -> bool {
+    sample_rate_hz > 0
+        && core_clock_hz.is_multiple_of(sample_rate_hz)
+        && systick_reload(core_clock_hz, sample_rate_hz) <= 0x00FF_FFFF
+}
+
 /// Starts SysTick interrupting at `sample_rate_hz` (the sampler's period) on the core clock.
 pub fn start_sampling(
     mut syst: cortex_m::peripheral::SYST,
