@@ -8,7 +8,7 @@
 //! Every number of the robot is the robot file's, as the host computes it in f64 (the stiffness
 //! from the material and cross-section, the guides' arc lengths), converted to the estimator's
 //! scalar once ([`rod`]). A robot that does not fit the image is a build error naming the capacity
-//! and the value (the assertions generated with the constants, and the ones below).
+//! and the value (`build.rs`, the parser it calls, and the assertions below and in `target/`).
 //!
 //! The default robot is the golden reference's bench (thesis experiment 2, average-mass model); a
 //! host test in [`crate::checks`] holds [`rod`] equal to `model_checks::reference::golden_bench`,
@@ -98,7 +98,7 @@ pub type BenchModel = Model<f32, Quaternion<f32>, MODEL_NODES>;
 ///
 /// # Errors
 /// [`ModelError`] if `steps_per_section` is zero (when the model is built) or a capacity of the
-/// rod is too small (which the build's assertions rule out).
+/// rod is too small (which the build rules out).
 pub fn rod<T: Scalar>(steps_per_section: u16) -> Result<Rod<T>, ModelError> {
     let mut rod = Rod::new();
     push_robot(&mut rod, steps_per_section)?;

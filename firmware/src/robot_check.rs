@@ -40,6 +40,12 @@ pub fn tip_force_n(tick: usize, scale_n: f64) -> Vector3<f64> {
     Vector3::new(0.1 * s, -0.3 + 0.1 * c, 0.2 + 0.15 * s) * scale_n
 }
 
+/// The robot's bending scale `E I / L^2`, N (its smallest bending stiffness over its length
+/// squared): what the load path and the force tolerance are scaled to.
+pub fn bending_scale_n(model: &BenchModel) -> f64 {
+    f64::from(model.moment_scale_nm() / model.length_m())
+}
+
 /// The largest force error a tick may have for a robot of bending scale `scale_n`, N: the
 /// firmware's [`FORCE_TOLERANCE_N`], and at most a tenth of the bending scale, so that on a soft
 /// robot an estimate of no force at all cannot pass (the path's loads are 0.2 to 0.5 scales).
@@ -96,7 +102,7 @@ pub fn run_path(
 ) -> Result<Summary, PathError> {
     let mut estimator = EstimatorLoop::new(model, loop_config())?;
     let spools = spools::<f32>();
-    let scale_n = f64::from(model.moment_scale_nm() / model.length_m());
+    let scale_n = bending_scale_n(model);
     let force_tolerance_n = force_tolerance_n(scale_n);
     let settings = ShootingSettings::default();
     let mut start = Start::Cold;
@@ -163,7 +169,7 @@ mod tests {
         }
         assert_eq!((summary.passed, summary.failed), (PATH_TICKS, 0));
         // The path loads the robot: at least a quarter of its bending scale.
-        let scale_n = f64::from(model.moment_scale_nm() / model.length_m());
+        let scale_n = bending_scale_n(&model);
         assert!(ticks.iter().all(|t| t.applied_n.norm() > 0.25 * scale_n));
         Ok(())
     }

@@ -9,7 +9,7 @@
 
 use serde::Deserialize;
 
-use super::{MAX_TOTAL_STEPS, Scene, SceneError};
+use super::{MAX_TOTAL_STEPS, Scene, SceneError, positive};
 
 /// `[drive]`: the spools that pay the cables out and in, one list entry per `[[cable]]`, in order.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -72,18 +72,11 @@ impl Scene {
     }
 
     fn check_drive_table(&self, drive: &DriveSpec) -> Result<(), SceneError> {
-        let positive = |key: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(SceneError::new(
-                    format!("drive.{key}"),
-                    format!("{x}: must be positive and finite"),
-                ))
-            }
-        };
-        positive("spool_radius_m", drive.spool_radius_m)?;
-        positive("max_cable_speed_m_per_s", drive.max_cable_speed_m_per_s)?;
+        positive("drive.spool_radius_m", drive.spool_radius_m)?;
+        positive(
+            "drive.max_cable_speed_m_per_s",
+            drive.max_cable_speed_m_per_s,
+        )?;
         let at_least = |key: &str, x: u32, least: u32| {
             if x >= least {
                 Ok(())
@@ -139,7 +132,7 @@ impl Scene {
             one_per_cable("reel_in_with_counts", drive.reel_in_with_counts.len())?;
         }
         for (i, x) in drive.home_lengths_m.iter().enumerate() {
-            positive(&format!("home_lengths_m[{i}]"), *x)?;
+            positive(&format!("drive.home_lengths_m[{i}]"), *x)?;
         }
         Ok(())
     }

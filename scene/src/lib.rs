@@ -631,6 +631,18 @@ fn finite(field: &str, x: f64) -> Result<f64, SceneError> {
     }
 }
 
+/// `x` if it is finite and above zero; else an error at `field` that shows it.
+fn positive(field: &str, x: f64) -> Result<f64, SceneError> {
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(SceneError::new(
+            field,
+            format!("{x}: must be a positive number"),
+        ))
+    }
+}
+
 impl Scene {
     /// Parses a scene from TOML text; `origin` names it in errors. Checks every size (see the
     /// module's documentation) before returning.
@@ -788,16 +800,6 @@ impl Scene {
     /// rest from `[estimate.tendons]` or model-core's defaults. Each value is checked, naming its key.
     pub fn tendon_inverse_settings(&self) -> Result<TendonInverseSettings<f64>, SceneError> {
         let e = &self.estimate;
-        let positive = |key: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(x)
-            } else {
-                Err(SceneError::new(
-                    key,
-                    format!("{x}: must be a positive number"),
-                ))
-            }
-        };
         let non_negative = |key: &str, x: f64| {
             if x.is_finite() && x >= 0.0 {
                 Ok(x)

@@ -38,6 +38,13 @@ fn micro(x: f64, scale: f64) -> u32 {
     }
 }
 
+/// The robot's estimator model, or `None` once it has said why the model refused the robot.
+fn the_model() -> Option<crate::config::BenchModel> {
+    crate::config::model()
+        .map_err(|e| hprintln!("model refused: {}", e))
+        .ok()
+}
+
 /// A check's summary, or `None` once it has said why the check could not start.
 fn started<S, E: core::fmt::Debug>(result: Result<S, E>) -> Option<S> {
     result.map_err(|e| hprintln!("setup refused: {:?}", e)).ok()
@@ -164,12 +171,8 @@ pub fn robot() -> bool {
     use crate::config::{MODEL_NODES, ROBOT_FILE, ROBOT_NAME, STEPS_PER_SECTION};
     use crate::robot_check::{self, PATH_TICKS};
 
-    let model = match crate::config::model() {
-        Ok(model) => model,
-        Err(e) => {
-            hprintln!("model refused: {}", e);
-            return false;
-        }
+    let Some(model) = the_model() else {
+        return false;
     };
     let Some(peripherals) = cortex_m::Peripherals::take() else {
         return false;
@@ -186,7 +189,7 @@ pub fn robot() -> bool {
         STEPS_PER_SECTION,
         PATH_TICKS,
         micro(
-            robot_check::force_tolerance_n(f64::from(model.moment_scale_nm() / model.length_m())),
+            robot_check::force_tolerance_n(robot_check::bending_scale_n(&model)),
             1e6
         )
     );
@@ -234,12 +237,8 @@ pub fn robot() -> bool {
 /// calling `tap` after each tick with its verdict, the loop's report and the loop (for [`e2e`]'s
 /// live link; outside the measured tick).
 pub fn e2e_trajectory(tap: &mut dyn FnMut(&TickCheck, &ReplayReport, &BenchLoop<'_>)) -> bool {
-    let model = match crate::config::model() {
-        Ok(model) => model,
-        Err(e) => {
-            hprintln!("model refused: {}", e);
-            return false;
-        }
+    let Some(model) = the_model() else {
+        return false;
     };
     let Some(peripherals) = cortex_m::Peripherals::take() else {
         return false;
@@ -290,12 +289,8 @@ pub fn e2e_trajectory(tap: &mut dyn FnMut(&TickCheck, &ReplayReport, &BenchLoop<
 
 /// The golden rows from their cable lengths alone.
 pub fn golden() -> bool {
-    let model = match crate::config::model() {
-        Ok(model) => model,
-        Err(e) => {
-            hprintln!("model refused: {}", e);
-            return false;
-        }
+    let Some(model) = the_model() else {
+        return false;
     };
     hprintln!(
         "golden: f32 cold estimate per golden row at {} steps; tolerance tip {} nm",
