@@ -414,6 +414,101 @@ fn tendon_tensions_come_back_from_displacements_in_f32() {
     tendon_displacement_round_trip::<f32>(2e-2, 1e-5);
 }
 
+/// A control loop's warm updates along an actuation (one tendon taken in, one paid out until slack,
+/// one from slack to taut; compliant tendons behind a feed, as the firmware's robot) give what a
+/// cold displacement-controlled solve of each tick's displacements gives: the warm path's shortcuts
+/// (its start not solved again, each forward solve started where the carried sensitivity of the
+/// base predicts, the tendon paths from the converged sweep) change the work, never the answer.
+fn tendon_warm_updates_match_cold_solves<T: Scalar>(tension_tol_n: f64, tip_tol_m: f64) {
+    let (rod, mut tendons) = reference::tendon_bench::<T>(20).unwrap();
+    for t in tendons.iter_mut() {
+        t.axial_stiffness_n = Some(T::lit(14_000.0));
+        t.feed_length_m = T::lit(0.3);
+    }
+    let model = Model::<T>::new(rod).unwrap();
+    let set = Tendons::new(&model, &tendons).unwrap();
+    let zero = TipLoad::zero();
+    let control = Default::default();
+    let displacements = |k: f64| {
+        [
+            0.05e-3 + 0.12e-3 * k,
+            0.12e-3 - 0.2e-3 * k,
+            -0.05e-3 + 0.01e-3 * k,
+        ]
+        .map(T::lit)
+    };
+    let mut previous = model
+        .solve_displacements(
+            &set,
+            &displacements(0.0),
+            &zero,
+            None,
+            &settings(),
+            &control,
+        )
+        .unwrap();
+    assert!(previous.is_success(), "{:?}", previous.termination);
+    let mut states_seen = Vec::new();
+    for tick in 1..12 {
+        let d = displacements(f64::from(tick));
+        let warm = model
+            .update_displacements(&set, &d, &zero, &previous, &settings(), &control)
+            .unwrap();
+        let cold = model
+            .solve_displacements(&set, &d, &zero, None, &settings(), &control)
+            .unwrap();
+        assert!(warm.is_success() && cold.is_success(), "tick {tick}");
+        assert_eq!(warm.states, cold.states, "tick {tick}");
+        for (j, (a, b)) in warm
+            .solved
+            .tensions_n
+            .iter()
+            .zip(&cold.solved.tensions_n)
+            .enumerate()
+        {
+            let off = (a.to_f64() - b.to_f64()).abs();
+            assert!(
+                off < tension_tol_n,
+                "tick {tick} tendon {j}: {off:e} N apart"
+            );
+        }
+        let tip = (warm.solved.equilibrium.tip_position_m - cold.solved.equilibrium.tip_position_m)
+            .map(Scalar::to_f64)
+            .norm();
+        assert!(tip < tip_tol_m, "tick {tick}: tips {tip:e} m apart");
+        // The answer's paths are the answer's: a fresh forward solve at its tensions agrees.
+        let again = model
+            .solve_tendons(&set, &warm.solved.tensions_n, &zero, None, &settings())
+            .unwrap();
+        for (a, b) in again.path_m.iter().zip(&warm.solved.path_m) {
+            let off = (a.to_f64() - b.to_f64()).abs();
+            assert!(off < tip_tol_m, "tick {tick}: paths {off:e} m apart");
+        }
+        assert!(
+            warm.sweeps < cold.sweeps,
+            "tick {tick}: {} vs {}",
+            warm.sweeps,
+            cold.sweeps
+        );
+        states_seen.push(warm.states.clone());
+        previous = warm;
+    }
+    // The actuation does what it says: tendon 1 ends slack, tendon 2 taut.
+    let last = states_seen.last().unwrap();
+    assert_eq!(last[1], TendonState::Slack);
+    assert_eq!(last[2], TendonState::Taut);
+}
+
+#[test]
+fn tendon_warm_updates_match_cold_solves_in_f64() {
+    tendon_warm_updates_match_cold_solves::<f64>(1e-8, 1e-9);
+}
+
+#[test]
+fn tendon_warm_updates_match_cold_solves_in_f32() {
+    tendon_warm_updates_match_cold_solves::<f32>(2e-3, 1e-5);
+}
+
 /// A tendon paid out beyond its path goes slack: zero tension, never negative, and its slack is
 /// what was paid out beyond the path of the taut solution.
 #[test]

@@ -28,7 +28,8 @@
 //!   (`Model::solve_displacements`: the tensions found),
 //! * `tendon_update_warm`: the warm updates along the recorded actuation
 //!   (`Model::update_displacements`; the costliest reported, with the worst tip error against the
-//!   f64 reference).
+//!   f64 reference),
+//! * `tendon_update_warm_median`: the same updates' median cost (and that update's sweeps).
 
 use model_checks::reference::golden_bench;
 use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
@@ -298,6 +299,7 @@ fn tendon_cases(
     let mut previous: Option<DisplacementSolve<f32>> = None;
     let mut worst = Worst::default();
     let mut worst_sweeps = 0u32;
+    let mut costs = [(0u64, 0u32); TRAJECTORY.len() - 1];
     for tick in 0..TRAJECTORY.len() {
         let d = displacements_m(tick).map(|x| x as f32);
         let mut out = None;
@@ -322,6 +324,9 @@ fn tendon_cases(
         } else {
             worst.add(cost, 0, out.is_success(), error);
             worst_sweeps = worst_sweeps.max(out.sweeps);
+            if let Some(slot) = costs.get_mut(tick - 1) {
+                *slot = (cost, out.sweeps);
+            }
         }
         previous = Some(out);
     }
@@ -329,6 +334,16 @@ fn tendon_cases(
         "tendon_update_warm",
         worst.cost,
         worst_sweeps,
+        worst.all_done,
+        worst.tip_error_m,
+    ));
+    // The typical tick: the median cost (and that tick's sweeps).
+    costs.sort_unstable();
+    let (cost, sweeps) = costs.get(costs.len() / 2).copied().unwrap_or_default();
+    report(&line(
+        "tendon_update_warm_median",
+        cost,
+        sweeps,
         worst.all_done,
         worst.tip_error_m,
     ));
@@ -391,7 +406,7 @@ mod tests {
             },
             &mut |l| lines.push(*l),
         )?;
-        assert_eq!(lines.len(), 8 * STEP_COUNTS.len() + 3);
+        assert_eq!(lines.len(), 8 * STEP_COUNTS.len() + 4);
         for l in &lines {
             println!("{l:?}");
             if !must_converge(l.case) {

@@ -13,13 +13,18 @@
 //! Jacobian, and the one Newton/LM and load continuation (`crate::solve`) solve it: single shooting,
 //! with a local solve per guide instead of multiple shooting's `6 (guides + 1)` unknowns.
 //!
+//! The look-aheads are most of a sweep's work, so the sweep's tangents ride along only on the one
+//! expected to end the local solve, and a correction whose successor Newton's quadratic
+//! convergence puts at rounding ends it without another look-ahead (MODEL.md §6.5).
+//!
 //! The state carries the previous guide's pose (the base plate's at the start) for the chords.
+
+use core::cell::Cell;
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::force_state::{self, ForceStateRod};
 use super::{Family, Linear, Pose, RodOde};
-use crate::Scalar;
 use crate::kinematics::Attitude;
 use crate::loads::{NoShapeLoad, TipLoad};
 use crate::model::{Grid, Model};
@@ -31,11 +36,68 @@ use crate::tendon::guide_force::{
     GuideLoad, GuidePose, PoseDelta, Role, guide_load, reads_next, role,
 };
 use crate::tendon::{MAX_TENDONS, Tendons};
+use crate::{MAX_GUIDES, Scalar};
 
 /// Newton iterations of one guide's implicit jump.
 const MAX_JUMP_ITERATIONS: usize = 12;
 
 static NO_SHAPE_LOAD: NoShapeLoad = NoShapeLoad;
+
+/// What the last sweep saw at the guides: its unknowns, its load scale and each guide's pose. The
+/// converged sweep of a solve has passed every guide, so a solve's tendon paths are read from it
+/// rather than from one more sweep (when the record is that sweep's: same unknowns, full scale).
+#[derive(Debug)]
+pub(crate) struct GuideRecord<T: Scalar> {
+    x: Cell<SVector<T, 6>>,
+    alpha: Cell<T>,
+    /// Guides passed by the last sweep, in order.
+    passed: Cell<usize>,
+    poses: [Cell<GuidePose<T>>; MAX_GUIDES],
+}
+
+impl<T: Scalar> GuideRecord<T> {
+    /// An empty record.
+    pub(crate) fn new() -> Self {
+        let blank = GuidePose {
+            position_m: Vector3::zeros(),
+            rotation: nalgebra::Matrix3::identity(),
+        };
+        Self {
+            x: Cell::new(SVector::zeros()),
+            alpha: Cell::new(T::zero()),
+            passed: Cell::new(0),
+            poses: core::array::from_fn(|_| Cell::new(blank)),
+        }
+    }
+
+    /// The guides' poses of the last sweep, if it ran at unknowns `x` at full load and passed
+    /// `guides` guides.
+    pub(crate) fn poses_at(
+        &self,
+        x: &SVector<T, 6>,
+        guides: usize,
+    ) -> Option<[GuidePose<T>; MAX_GUIDES]> {
+        let whole =
+            self.x.get() == *x && self.alpha.get() == T::one() && self.passed.get() == guides;
+        whole.then(|| self.poses.each_ref().map(Cell::get))
+    }
+
+    fn start(&self, x: &SVector<T, 6>, alpha: T) {
+        self.x.set(*x);
+        self.alpha.set(alpha);
+        self.passed.set(0);
+    }
+
+    fn pass(&self, guide: usize, pose: &GuidePose<T>) {
+        if let Some(cell) = self.poses.get(guide) {
+            cell.set(*pose);
+            // In order: a guide passed out of turn leaves the record incomplete.
+            if self.passed.get() == guide {
+                self.passed.set(guide + 1);
+            }
+        }
+    }
+}
 
 /// The rod under dead loads and the tendons' tensions.
 #[derive(Debug)]
@@ -43,6 +105,7 @@ pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
     rod: ForceStateRod<'a, T, A, NoShapeLoad, NODES>,
     model: &'a Model<T, A, NODES>,
     tendons: &'a Tendons<T>,
+    record: Option<&'a GuideRecord<T>>,
     /// Full tensions, N.
     tensions_n: [T; MAX_TENDONS],
     /// Tensions at the load scale, N.
@@ -71,8 +134,17 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             rod: ForceStateRod::new(model, &NO_SHAPE_LOAD, load, alpha),
             model,
             tendons,
+            record: None,
             tensions_n: *tensions_n,
             scaled_n: tensions_n.map(|t| t * alpha),
+        }
+    }
+
+    /// These equations, keeping in `record` what each sweep sees at the guides.
+    pub(crate) fn recording(self, record: &'a GuideRecord<T>) -> Self {
+        Self {
+            record: Some(record),
+            ..self
         }
     }
 
@@ -100,13 +172,6 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         GuidePose {
             position_m: y.p + y.p_lo,
             rotation: y.att.matrix(),
-        }
-    }
-
-    fn delta(t: &force_state::Tangent<T>) -> PoseDelta<T> {
-        PoseDelta {
-            position_m: t.p,
-            rotation_rad: t.th,
         }
     }
 
@@ -172,6 +237,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     /// The implicit jump at `guide` (node index `index`), where a tendon passes: solves for
     /// `(n(s+), m(s+))`, sets the chord tensions beyond and makes the tangents consistent. `false`
     /// when it does not converge.
+    ///
+    /// Newton's look-aheads carry the six directions of `(n, m)` only; the sweep's tangents ride
+    /// along on the look-ahead expected to end the solve (Newton's quadratic convergence predicts
+    /// the next correction), or on one more at the answer when that prediction missed. They start
+    /// from the tangents before the jump and are corrected at the end by linearity (the segment's
+    /// six directions), so the known poses' share is taken at the answer's next pose: the
+    /// tangents are the converged jump's, for a fraction of the look-ahead work.
     fn implicit_jump(
         &self,
         index: usize,
@@ -203,42 +275,44 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let (mut n, mut m) = (n_minus - w0.force_n, m_minus - w0.moment_nm);
 
         let count = tangents.len().min(MAX_TANGENTS);
-        let mut outer = [force_state::Tangent::zero(); MAX_TANGENTS];
-        let mut next_guess = predicted;
         let scale = self.stack(&n_minus, &m_minus).norm()
             + self.stack(&w0.force_n, &w0.moment_nm).norm()
             + self.model.moment_scale_nm();
         let eps = T::default_epsilon();
-        let mut last_step = T::max_value().unwrap_or_else(T::one);
+        let done_at = T::lit(16.0) * eps * scale;
+        // With friction here the tensions beyond read the next pose: the answer must be at
+        // rounding itself, not one correction from it.
+        let friction = self
+            .tendons
+            .routed
+            .iter()
+            .any(|r| r.capstan_per_rad != T::zero() && role(r, guide) == Role::Passes);
+        let mut last_step: Option<T> = None;
+        let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
-        for iteration in 0..MAX_JUMP_ITERATIONS {
-            // Each tangent's change before the look-ahead: what the known poses and tensions give
-            // (at the last look-ahead's next pose: the chord ahead sets how this hole's move pulls).
-            for (o, t) in outer.iter_mut().zip(tangents.iter()) {
-                let d = Self::delta(&t.rod);
-                let dw = self
-                    .load(
-                        guide,
-                        &back,
-                        [&prev, &cur, &next_guess],
-                        Some(([&t.prev, &d, &zero], &t.d_chord_n)),
-                    )
-                    .d_wrench;
-                *o = t.rod;
-                o.n -= dw.force_n;
-                o.m -= dw.moment_nm;
-            }
-            for (j, t) in all.iter_mut().enumerate() {
+        for _ in 0..MAX_JUMP_ITERATIONS {
+            // The tangents ride along when this look-ahead's correction is expected to end the
+            // solve, `C |last|^2` with `C` from the last two corrections and a margin of 4. Before
+            // two corrections show `C`, a prior: `0.1 / scale`, 25 times the largest measured on
+            // the bench (a wrong prior costs a look-ahead, never the answer).
+            let c = contraction.unwrap_or(T::lit(0.1) / scale);
+            let ride = count > 0
+                && last_step.is_some_and(|s| {
+                    let e = c * s * s;
+                    e * T::lit(4.0) <= done_at || (!friction && T::lit(4.0) * c * e * e <= done_at)
+                });
+            let carried = if ride { count } else { 0 };
+            for (j, t) in all.iter_mut().enumerate().take(6 + carried) {
                 *t = force_state::Tangent::zero();
                 if j < 3 {
                     t.n = super::unit::<T, 3>(j) / length;
                 } else if j < 6 {
                     t.m = super::unit::<T, 3>(j - 3);
-                } else if let Some(o) = outer.get(j - 6).filter(|_| j - 6 < count) {
-                    *t = *o;
+                } else if let Some(t0) = tangents.get(j - 6) {
+                    *t = t0.rod;
                 }
             }
-            let Some(dirs) = all.get_mut(..6 + count) else {
+            let Some(dirs) = all.get_mut(..6 + carried) else {
                 return false;
             };
             let start = force_state::State { n, m, ..y.rod };
@@ -246,21 +320,26 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 return false;
             };
             let next = Self::guide_pose(&end);
-            next_guess = next;
             let poses = [&prev, &cur, &next];
             let here = self.load(guide, &back, poses, None);
             let w = here.wrench;
             let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
-            let mut jacobian = SMatrix::<T, 6, 6>::identity();
-            for (j, mut col) in jacobian.column_iter_mut().enumerate() {
-                let d = all.get(j).map_or(zero, Self::delta);
+            // `W_next`: the wrench per move of the next pose (stacked both); `Psi`: the next pose's
+            // moves along the look-ahead's six directions.
+            let mut w_next = SMatrix::<T, 6, 6>::zeros();
+            for (j, mut col) in w_next.column_iter_mut().enumerate() {
+                let d = unstacked(&super::unit::<T, 6>(j));
                 let no_change = [T::zero(); MAX_TENDONS];
                 let dw = self
                     .load(guide, &back, poses, Some(([&zero, &zero, &d], &no_change)))
                     .d_wrench;
-                col += self.stack(&dw.force_n, &dw.moment_nm);
+                col.copy_from(&self.stack(&dw.force_n, &dw.moment_nm));
             }
-            let lu = jacobian.lu();
+            let mut psi = SMatrix::<T, 6, 6>::zeros();
+            for (mut col, t) in psi.column_iter_mut().zip(all.iter()) {
+                col.copy_from(&stacked(&pose_delta(t)));
+            }
+            let lu = (SMatrix::<T, 6, 6>::identity() + w_next * psi).lu();
             let Some(step) = lu.solve(&(-g)) else {
                 return false;
             };
@@ -271,37 +350,57 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             n += dn / length;
             m += dm;
             let size = step.norm();
-            // Not at the first pass: its tangents were started from the straight-ahead guess of the
-            // next pose, which only a look-ahead replaces.
-            let done = iteration >= 1 && size <= T::lit(16.0) * eps * scale;
-            let stalled = iteration >= 2 && size >= last_step * T::lit(0.5);
-            if done || stalled {
-                if size > T::lit(1024.0) * eps * scale {
+            let stalled =
+                last_step.is_some_and(|last| size >= last * T::lit(0.5)) && contraction.is_some();
+            contraction = last_step
+                .filter(|last| *last > T::zero())
+                .map(|last| size / (last * last));
+            last_step = Some(size);
+            // Done when the correction is at rounding, or (without friction) when the one it
+            // leaves, `C |step|^2`, is.
+            let done = size <= done_at
+                || (!friction
+                    && contraction.is_some_and(|c| T::lit(4.0) * c * size * size <= done_at));
+            if !(done || stalled) {
+                continue;
+            }
+            if !done && size > T::lit(1024.0) * eps * scale {
+                return false;
+            }
+            if count > carried {
+                // Converged on a look-ahead without the tangents: one more, at the answer, with them.
+                contraction = Some(T::zero());
+                continue;
+            }
+            // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`; the next
+            // pose then moves by `dP0 + Psi delta`, which sets the tensions beyond. `dx0` is the
+            // tangent before the jump less the known poses' and tensions' share, here; the look-ahead
+            // integrated the tangent before the jump, so its end is corrected along the six
+            // directions (the look-ahead is linear in its tangents).
+            for (j, t) in tangents.iter_mut().enumerate().take(count) {
+                let Some(ahead) = all.get(6 + j) else {
                     return false;
-                }
-                // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`; the
-                // next pose then moves by `dP0 + Psi delta`, which sets the tensions beyond.
-                for (j, t) in tangents.iter_mut().enumerate().take(count) {
-                    let (Some(ahead), Some(provisional)) = (all.get(6 + j), outer.get(j)) else {
-                        return false;
-                    };
-                    let d0 = Self::delta(ahead);
-                    let no_change = [T::zero(); MAX_TENDONS];
-                    let dw = self
-                        .load(guide, &back, poses, Some(([&zero, &zero, &d0], &no_change)))
-                        .d_wrench;
-                    let Some(delta) = lu.solve(&(-self.stack(&dw.force_n, &dw.moment_nm))) else {
-                        return false;
-                    };
-                    let (dn, dm) = split(&delta);
-                    t.rod.n = provisional.n + dn / length;
-                    t.rod.m = provisional.m + dm;
-                    let mut d_next = d0;
-                    for (dir, k) in all.iter().zip(delta.iter()) {
-                        d_next.position_m += dir.p * *k;
-                        d_next.rotation_rad += dir.th * *k;
-                    }
-                    let d_cur = Self::delta(&t.rod);
+                };
+                let d = pose_delta(&t.rod);
+                let known = self
+                    .load(
+                        guide,
+                        &back,
+                        poses,
+                        Some(([&t.prev, &d, &zero], &t.d_chord_n)),
+                    )
+                    .d_wrench;
+                let fix = self.stack(&(-known.force_n), &(-known.moment_nm));
+                let d0 = stacked(&pose_delta(ahead)) + psi * fix;
+                let Some(delta) = lu.solve(&(-(w_next * d0))) else {
+                    return false;
+                };
+                let (dn, dm) = split(&(fix + delta));
+                t.rod.n += dn / length;
+                t.rod.m += dm;
+                if friction {
+                    let d_next = unstacked(&(d0 + psi * delta));
+                    let d_cur = pose_delta(&t.rod);
                     let full = self.load(
                         guide,
                         &back,
@@ -315,12 +414,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                         &mut t.d_chord_n,
                     );
                 }
-                carry(&self.tendons.routed, guide, &here.ahead_n, &mut y.chord_n);
-                y.rod.n = n;
-                y.rod.m = m;
-                return true;
             }
-            last_step = size;
+            carry(&self.tendons.routed, guide, &here.ahead_n, &mut y.chord_n);
+            y.rod.n = n;
+            y.rod.m = m;
+            return true;
         }
         false
     }
@@ -337,6 +435,29 @@ fn carry<T: Scalar>(
         if role(r, guide) == Role::Passes {
             *c = *a;
         }
+    }
+}
+
+/// A tangent's pose change: position (global) and rotation (body frame).
+fn pose_delta<T: Scalar>(t: &force_state::Tangent<T>) -> PoseDelta<T> {
+    PoseDelta {
+        position_m: t.p,
+        rotation_rad: t.th,
+    }
+}
+
+/// A pose change stacked: position (m, rows 0-2), rotation (rad, rows 3-5).
+fn stacked<T: Scalar>(d: &PoseDelta<T>) -> SVector<T, 6> {
+    let (p, r) = (&d.position_m, &d.rotation_rad);
+    SVector::<T, 6>::new(p.x, p.y, p.z, r.x, r.y, r.z)
+}
+
+/// A stacked pose change as a [`PoseDelta`].
+fn unstacked<T: Scalar>(v: &SVector<T, 6>) -> PoseDelta<T> {
+    let (position_m, rotation_rad) = split(v);
+    PoseDelta {
+        position_m,
+        rotation_rad,
     }
 }
 
@@ -446,6 +567,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     }
 
     fn start(&self, x: &SVector<T, 6>) -> State<T, A> {
+        if let Some(record) = self.record {
+            record.start(x, self.rod.alpha());
+        }
         let rod = self.model.rod();
         State {
             rod: self.rod.start(x),
@@ -552,6 +676,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         }
         let guide = usize::from(node.guide);
         let cur = Self::guide_pose(&y.rod);
+        if let Some(record) = self.record {
+            record.pass(guide, &cur);
+        }
         let zero = PoseDelta::zero();
         if reads_next(&self.tendons.routed, &y.chord_n, guide) {
             let grid = self.rod.grid();
@@ -566,7 +693,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             let poses = [&prev, &cur, &cur];
             let w = self.load(guide, &y.chord_n, poses, None).wrench;
             for t in tangents.iter_mut() {
-                let d = Self::delta(&t.rod);
+                let d = pose_delta(&t.rod);
                 let dw = self
                     .load(
                         guide,
@@ -583,7 +710,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         }
         y.prev = cur;
         for t in tangents.iter_mut() {
-            t.prev = Self::delta(&t.rod);
+            t.prev = pose_delta(&t.rod);
         }
     }
 
@@ -606,12 +733,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         if let Some(node) = node.filter(|n| n.guide != NO_GUIDE) {
             let guide = usize::from(node.guide);
             let cur = Self::guide_pose(&y.rod);
+            if let Some(record) = self.record {
+                record.pass(guide, &cur);
+            }
             let zero = PoseDelta::zero();
             let poses = [&y.prev, &cur, &cur];
             let w = self.load(guide, &y.chord_n, poses, None).wrench;
             r -= self.stack(&w.force_n, &w.moment_nm);
             for (e, t) in d.iter_mut().zip(tangents) {
-                let dc = Self::delta(&t.rod);
+                let dc = pose_delta(&t.rod);
                 let dw = self
                     .load(
                         guide,
@@ -685,13 +815,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sweep::{TangentSet, sweep};
     use crate::tendon::Tendon;
     use crate::{CrossSection, Guide, GuideMass, Material, Rod, Section, Stiffness};
 
-    fn scene() -> (Model<f64>, [Tendon<f64>; 2]) {
+    /// A rod under gravity with four guides and two tendons, one ending mid-way.
+    pub(crate) fn scene() -> (Model<f64>, [Tendon<f64>; 2]) {
         let mut rod = Rod::new();
         rod.gravity_m_s2 = Vector3::new(0.0, -9.81, 0.0);
         rod.guide_mass = GuideMass::Ignore;

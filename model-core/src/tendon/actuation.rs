@@ -15,7 +15,7 @@
 //! sensitivity to the tensions (`sensitivity.rs`).
 
 use heapless::Vec;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::sensitivity::{sensitivity, tension_scale_n};
 use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
@@ -80,6 +80,11 @@ pub struct DisplacementSolve<T> {
     /// Whether [`DisplacementSolve::d_length_d_tension`] holds a sensitivity (not after a failure
     /// before the first one).
     pub has_sensitivity: bool,
+    /// How the base's internal force (N, rows 0-2) and moment (N m, rows 3-5) change with the
+    /// tensions, per N (secants along the steps taken, or differences with the sensitivity): each
+    /// forward solve of a step starts where it predicts, a warm update's too. Zero until a step
+    /// was taken.
+    pub d_base_d_tension: SMatrix<T, 6, MAX_TENDONS>,
 }
 
 impl<T: Scalar> DisplacementSolve<T> {
@@ -99,6 +104,47 @@ fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
         let half = T::one() - T::lit(core::f64::consts::FRAC_1_SQRT_2);
         (T::zero(), half, half)
     }
+}
+
+/// `a - b`, as a vector.
+fn difference<T: Scalar>(a: &[T; MAX_TENDONS], b: &[T; MAX_TENDONS]) -> SVector<T, MAX_TENDONS> {
+    SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
+        a.get(j).copied().unwrap_or_else(T::zero) - b.get(j).copied().unwrap_or_else(T::zero)
+    })
+}
+
+/// The base's internal force (N) and moment (N m) of an equilibrium, stacked.
+fn base_of<T: Scalar>(eq: &TendonEquilibrium<T>) -> SVector<T, 6> {
+    let (f, m) = (&eq.equilibrium.base_force_n, &eq.equilibrium.base_moment_nm);
+    SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
+}
+
+/// The largest predicted move of the base a forward solve starts from, as a fraction of the
+/// moment that bends the rod a radian (a lateral force counted by its moment over the rod's
+/// length; an axial one bends nothing): a tracking step. Beyond it the solve starts from the equilibrium itself: a long linear prediction
+/// can land Newton on another branch (measured: all three of the bench's tendons taken in 5 cm
+/// from rest, where the start converges nowhere, reached a rod buckled between its guides).
+const PREDICTED_BASE_MOVE: f64 = 0.05;
+
+/// Where a forward solve at tensions changed by `dt` starts, base force (N) and moment (N m):
+/// `at`'s, moved by `d_base dt` if that move is at most [`PREDICTED_BASE_MOVE`] of
+/// `moment_scale_nm`.
+fn predict<T: Scalar>(
+    at: &TendonEquilibrium<T>,
+    d_base: &SMatrix<T, 6, MAX_TENDONS>,
+    dt: &SVector<T, MAX_TENDONS>,
+    tangent: &Vector3<T>,
+    length_m: T,
+    moment_scale_nm: T,
+) -> (Vector3<T>, Vector3<T>) {
+    let (force_n, moment_nm) = (at.equilibrium.base_force_n, at.equilibrium.base_moment_nm);
+    let moved = d_base * dt;
+    let (force, moment) = (moved.fixed_rows::<3>(0), moved.fixed_rows::<3>(3));
+    let lateral = force - tangent * tangent.dot(&force);
+    if lateral.norm() * length_m + moment.norm() > T::lit(PREDICTED_BASE_MOVE) * moment_scale_nm {
+        return (force_n, moment_nm);
+    }
+    (force_n + force, moment_nm + moment)
 }
 
 impl<T: Scalar> Tendons<T> {
@@ -182,8 +228,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     ) -> Result<DisplacementSolve<T>, ModelError> {
         // A failed solve is no start: the update is then a cold one.
         let usable = previous.is_success();
-        let sensitivity =
-            (usable && previous.has_sensitivity).then_some(&previous.d_length_d_tension);
+        let sensitivity = (usable && previous.has_sensitivity)
+            .then_some((&previous.d_length_d_tension, &previous.d_base_d_tension));
         self.displacement_solve(
             tendons,
             displacements_m,
@@ -202,7 +248,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         displacements_m: &[T],
         load: &TipLoad<T>,
         start: Option<&TendonEquilibrium<T>>,
-        sensitivity_start: Option<&SMatrix<T, MAX_TENDONS, MAX_TENDONS>>,
+        sensitivity_start: Option<(
+            &SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+            &SMatrix<T, 6, MAX_TENDONS>,
+        )>,
         shooting: &ShootingSettings<T>,
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
@@ -222,14 +271,30 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
         }
         let mut sweeps = 0u32;
-        let mut current = self.solve_tendons(
-            tendons,
-            tau.get(..count).unwrap_or(&[]),
-            load,
-            start,
-            shooting,
-        )?;
-        sweeps += u32::from(current.equilibrium.report.sweeps);
+        // A warm update's start is this model's answer at its tensions: under the same load it is
+        // the equilibrium to start from, without solving it again.
+        let same = sensitivity_start.is_some()
+            && start.is_some_and(|s| {
+                s.is_success()
+                    && s.equilibrium.load == *load
+                    && s.tensions_n.len() == count
+                    && s.unstretched_m.len() == count
+                    && s.tensions_n.iter().zip(&tau).all(|(a, b)| a == b)
+            });
+        let mut current = match start.filter(|_| same) {
+            Some(s) => s.clone(),
+            None => {
+                let solved = self.solve_tendons(
+                    tendons,
+                    tau.get(..count).unwrap_or(&[]),
+                    load,
+                    start,
+                    shooting,
+                )?;
+                sweeps += u32::from(solved.equilibrium.report.sweeps);
+                solved
+            }
+        };
 
         let residual_of = |eq: &TendonEquilibrium<T>, tau: &[T; MAX_TENDONS]| {
             let phi = tendons.slack(displacements_m, &eq.unstretched_m);
@@ -253,7 +318,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut iterations = 0u16;
         // d N / d tau, and whether it was differenced at the current point (else carried and
         // Broyden-updated).
-        let mut sens = sensitivity_start.copied();
+        let base_tangent = self.rod().base_orientation.column(2).into_owned();
+        let mut sens = sensitivity_start.map(|(s, _)| *s);
+        let mut d_base = sensitivity_start.map_or_else(SMatrix::zeros, |(_, b)| *b);
         let mut fresh = false;
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
@@ -274,6 +341,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         sweeps += d.sweeps;
                         fresh = true;
                         sens = Some(d.d_length_d_tension);
+                        d_base = d.d_base_d_tension;
                         d.d_length_d_tension
                     }
                     Err(t) => {
@@ -304,11 +372,20 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 for ((t, now), d) in trial.iter_mut().zip(&tau).zip(step.iter()).take(count) {
                     *t = (*now + *d * alpha).max(T::zero());
                 }
-                let moved = self.solve_tendons(
+                let dt = difference(&trial, &tau);
+                let predicted = predict(
+                    &current,
+                    &d_base,
+                    &dt,
+                    &base_tangent,
+                    self.length_m(),
+                    self.moment_scale_nm(),
+                );
+                let moved = self.solve_tendons_from(
                     tendons,
                     trial.get(..count).unwrap_or(&[]),
                     load,
-                    Some(&current),
+                    Some(predicted),
                     shooting,
                 )?;
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
@@ -323,15 +400,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
             match accepted {
                 Some((trial, moved)) => {
-                    // A carried sensitivity that gained less than a factor ten is differenced
-                    // afresh next time: Broyden's secants alone converge slowly near the answer.
+                    // A carried sensitivity that gained less than a factor four is differenced
+                    // afresh next time: Broyden's secants alone converge slowly near the answer,
+                    // and differencing costs a forward solve per tendon, a Broyden step one. Not
+                    // when the step reached the rounding floor: there is no gain left to see.
                     let (r_new, _, _) = residual_of(&moved, &trial);
-                    let slow = !fresh && r_new.amax() > size * T::lit(0.1);
+                    let slow = !fresh && r_new.amax() > size * T::lit(0.25) && r_new.amax() > floor;
                     // Broyden: the secant along the step taken.
-                    let dt = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
-                        trial.get(j).copied().unwrap_or_else(T::zero)
-                            - tau.get(j).copied().unwrap_or_else(T::zero)
-                    });
+                    let dt = difference(&trial, &tau);
                     let dn = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
                         match (moved.unstretched_m.get(j), current.unstretched_m.get(j)) {
                             (Some(a), Some(b)) => *a - *b,
@@ -343,6 +419,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         sens = None;
                     } else if norm2 > T::zero() {
                         sens = Some(s + (dn - s * dt) * dt.transpose() / norm2);
+                    }
+                    if norm2 > T::zero() {
+                        let db = base_of(&moved) - base_of(&current);
+                        d_base += (db - d_base * dt) * dt.transpose() / norm2;
                     }
                     fresh = false;
                     tau = trial;
@@ -393,6 +473,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             sweeps,
             has_sensitivity: sens.is_some(),
             d_length_d_tension: sens.unwrap_or_else(SMatrix::zeros),
+            d_base_d_tension: d_base,
         })
     }
 }

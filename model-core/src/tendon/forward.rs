@@ -2,7 +2,7 @@
 //! tensions, the scene's gravity and point loads and a tip load, and each tendon's path length.
 
 use heapless::Vec;
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector3};
 
 use super::paths::{Lengths, lengths};
 use super::{MAX_TENDONS, Tendons};
@@ -11,10 +11,11 @@ use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::tendon::TendonRod;
+use crate::ode::tendon::{GuideRecord, TendonRod};
 use crate::report::Termination;
 use crate::shape::ShapePoint;
 use crate::shooting::{Equilibrium, ShootingSettings, equilibrium, shape_of};
+use crate::tendon::guide_force::GuidePose;
 use crate::{MAX_GUIDES, Scalar};
 
 /// An equilibrium under tendon tensions.
@@ -89,18 +90,33 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         start: Option<&TendonEquilibrium<T>>,
         settings: &ShootingSettings<T>,
     ) -> Result<TendonEquilibrium<T>, ModelError> {
+        // A failed equilibrium is no start: its zeros would send a direct Newton off at full load.
+        let start = start
+            .filter(|s| s.is_success())
+            .map(|s| (s.equilibrium.base_force_n, s.equilibrium.base_moment_nm));
+        self.solve_tendons_from(tendons, tensions_n, load, start, settings)
+    }
+
+    /// [`Model::solve_tendons`] from a base force (N) and moment (N m), or cold.
+    pub(crate) fn solve_tendons_from(
+        &self,
+        tendons: &Tendons<T>,
+        tensions_n: &[T],
+        load: &TipLoad<T>,
+        start: Option<(Vector3<T>, Vector3<T>)>,
+        settings: &ShootingSettings<T>,
+    ) -> Result<TendonEquilibrium<T>, ModelError> {
         tendons.check_model(self)?;
         let tau = tendons.check_tensions(tensions_n)?;
         load.validate()?;
         settings.validate()?;
-        let ode = TendonRod::new(self, tendons, &tau, load, T::one());
-        // A failed equilibrium is no start: its zeros would send a direct Newton off at full load.
-        let start = match start.filter(|s| s.is_success()) {
-            Some(previous) => {
-                let eq = &previous.equilibrium;
-                finite_vec(&eq.base_force_n, "warm-start base force")?;
-                finite_vec(&eq.base_moment_nm, "warm-start base moment")?;
-                Some(ode.unknowns(&eq.base_force_n, &eq.base_moment_nm))
+        let record = GuideRecord::new();
+        let ode = TendonRod::new(self, tendons, &tau, load, T::one()).recording(&record);
+        let start = match start {
+            Some((force_n, moment_nm)) => {
+                finite_vec(&force_n, "warm-start base force")?;
+                finite_vec(&moment_nm, "warm-start base moment")?;
+                Some(ode.unknowns(&force_n, &moment_nm))
             }
             None => None,
         };
@@ -116,7 +132,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut unstretched_m = Vec::new();
         if let (true, Some(x)) = (eq.report.termination.is_success(), x) {
             match self
-                .tendon_lengths(tendons, tensions_n, &ode, &x)
+                .tendon_lengths(tendons, tensions_n, &ode, &record, &x)
                 .filter(|l| {
                     l.path_m
                         .iter()
@@ -146,24 +162,30 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         })
     }
 
+    /// The tendons' lengths at the answer `x`: from the guides the solve's last sweep passed when
+    /// it was at `x` (the converged sweep), else from a shape sweep. Out of line: its buffers stay
+    /// out of the solve's frame.
+    #[inline(never)]
     fn tendon_lengths(
         &self,
         tendons: &Tendons<T>,
         tensions_n: &[T],
         ode: &TendonRod<'_, T, A, NODES>,
+        record: &GuideRecord<T>,
         x: &SVector<T, 6>,
     ) -> Option<Lengths<T>> {
-        let mut guides = [ShapePoint::default(); MAX_GUIDES];
         let count = tendons.guide_s_m.len();
-        let out = guides.get_mut(..count)?;
-        let written = shape_of(ode, x, &tendons.guide_s_m, out).ok()?;
+        let poses = match record.poses_at(x, count) {
+            Some(poses) => poses,
+            None => guide_poses(ode, x, &tendons.guide_s_m)?,
+        };
         let rod = self.rod();
         lengths(
             tendons,
             tensions_n,
             &rod.base_position_m,
             &rod.base_orientation,
-            guides.get(..written)?,
+            poses.get(..count)?,
         )
     }
 
@@ -180,5 +202,89 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let ode = TendonRod::new(self, tendons, &tau, &eq.load, T::one());
         let x = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
         shape_of(&ode, &x, s_m, out)
+    }
+}
+
+/// The guides' poses at the arc lengths `guide_s_m` of `ode` at unknowns `x`, by a shape sweep.
+#[inline(never)]
+fn guide_poses<T: Scalar, A: Attitude<T>, const NODES: usize>(
+    ode: &TendonRod<'_, T, A, NODES>,
+    x: &SVector<T, 6>,
+    guide_s_m: &[T],
+) -> Option<[GuidePose<T>; MAX_GUIDES]> {
+    let mut points = [ShapePoint::default(); MAX_GUIDES];
+    let written = shape_of(ode, x, guide_s_m, points.get_mut(..guide_s_m.len())?).ok()?;
+    (written == guide_s_m.len()).then(|| {
+        points.map(|p| GuidePose {
+            position_m: p.position_m,
+            rotation: p.rotation,
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tendon::{Sliding, Tendon};
+
+    /// `ode::tendon`'s test scene, its tendons with friction `mu`, compliant, behind a feed.
+    fn scene(mu: f64) -> (Model<f64>, [Tendon<f64>; 2]) {
+        let (model, mut tendons) = crate::ode::tendon::tests::scene();
+        for t in tendons.iter_mut() {
+            t.friction_coefficient = mu;
+            t.axial_stiffness_n = Some(2000.0);
+            t.feed_length_m = 0.4;
+        }
+        (model, tendons)
+    }
+
+    /// The paths a solve reads from its converged sweep's guides are those of a shape sweep at
+    /// its answer, to rounding, with and without friction; a record of another sweep is not used.
+    #[test]
+    fn tendon_paths_from_the_converged_sweep_are_the_shape_sweeps() {
+        for (mu, sliding) in [(0.0, Sliding::In), (0.2, Sliding::In), (0.2, Sliding::Out)] {
+            let (model, tendons) = scene(mu);
+            let mut set = Tendons::new(&model, &tendons).unwrap();
+            set.set_sliding(0, sliding);
+            set.set_sliding(1, sliding);
+            let tau = [2.0, 1.2];
+            let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+            let solved = model
+                .solve_tendons(&set, &tau, &load, None, &ShootingSettings::default())
+                .unwrap();
+            assert!(solved.is_success(), "{:?}", solved.equilibrium.report);
+            let mut full = [0.0; MAX_TENDONS];
+            full[..2].copy_from_slice(&tau);
+            let ode = TendonRod::new(&model, &set, &full, &load, 1.0);
+            let eq = &solved.equilibrium;
+            let x = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+            let poses = guide_poses(&ode, &x, &set.guide_s_m).unwrap();
+            let rod = model.rod();
+            let swept = lengths(
+                &set,
+                &tau,
+                &rod.base_position_m,
+                &rod.base_orientation,
+                &poses[..set.guide_s_m.len()],
+            )
+            .unwrap();
+            for j in 0..2 {
+                let path = (solved.path_m[j] - swept.path_m[j]).abs();
+                let unstretched = (solved.unstretched_m[j] - swept.unstretched_m[j]).abs();
+                assert!(path < 1e-14, "mu {mu} tendon {j}: paths {path:e} m apart");
+                assert!(
+                    unstretched < 1e-14,
+                    "mu {mu} tendon {j}: {unstretched:e} m apart"
+                );
+            }
+            // The record answers only for the sweep it saw.
+            let record = GuideRecord::new();
+            let recording = TendonRod::new(&model, &set, &full, &load, 1.0).recording(&record);
+            let _ = crate::sweep::sweep(&recording, &x, crate::sweep::TangentSet::NONE, None);
+            let count = set.guide_s_m.len();
+            assert!(record.poses_at(&x, count).is_some());
+            assert!(record.poses_at(&(x * 1.001), count).is_none());
+            assert!(record.poses_at(&x, count + 1).is_none());
+        }
     }
 }

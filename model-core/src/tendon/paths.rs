@@ -9,10 +9,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::guide_force::wrap_and_change;
+use super::guide_force::{GuidePose, wrap_and_change};
 use super::{MAX_TENDONS, Tendons};
 use crate::Scalar;
-use crate::shape::ShapePoint;
 
 /// Each tendon's path, m, and the unstretched length it needs, m.
 #[derive(Clone, Copy, Debug)]
@@ -28,7 +27,7 @@ pub(crate) fn lengths<T: Scalar>(
     tensions_n: &[T],
     base_position_m: &Vector3<T>,
     base_rotation: &Matrix3<T>,
-    guides: &[ShapePoint<T>],
+    guides: &[GuidePose<T>],
 ) -> Option<Lengths<T>> {
     let mut out = Lengths {
         path_m: [T::zero(); MAX_TENDONS],

@@ -27,6 +27,8 @@ pub(crate) struct Sensitivity<T> {
     pub d_length_d_force: SMatrix<T, MAX_TENDONS, 3>,
     pub d_tip_d_tension: SMatrix<T, 3, MAX_TENDONS>,
     pub d_tip_d_force: SMatrix<T, 3, 3>,
+    /// The base's internal force (rows 0-2, N) and moment (rows 3-5, N m) per unit tension.
+    pub d_base_d_tension: SMatrix<T, 6, MAX_TENDONS>,
     /// Sweeps spent.
     pub sweeps: u32,
 }
@@ -70,6 +72,7 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
         d_length_d_force: SMatrix::zeros(),
         d_tip_d_tension: SMatrix::zeros(),
         d_tip_d_force: SMatrix::zeros(),
+        d_base_d_tension: SMatrix::zeros(),
         sweeps: 0,
     };
     let count = tendons.len();
@@ -109,6 +112,13 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
             }
         });
         if c < count {
+            let (e, a) = (&moved.equilibrium, &at.equilibrium);
+            let (df, dm) = (
+                (e.base_force_n - a.base_force_n) / h,
+                (e.base_moment_nm - a.base_moment_nm) / h,
+            );
+            out.d_base_d_tension
+                .set_column(c, &SVector::<T, 6>::new(df.x, df.y, df.z, dm.x, dm.y, dm.z));
             out.d_length_d_tension.set_column(c, &d_length);
             out.d_tip_d_tension.set_column(c, &d_tip);
         } else {

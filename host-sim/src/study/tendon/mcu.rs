@@ -103,15 +103,16 @@ pub fn trajectory(text: &str) -> Result<Vec<Tick>, SceneError> {
 /// One tendon case of the firmware bench.
 #[derive(Clone, Debug, PartialEq)]
 pub struct QemuTendon {
-    /// `tendon_forward_cold`, `tendon_displacement_cold` or `tendon_update_warm`.
+    /// `tendon_forward_cold`, `tendon_displacement_cold`, `tendon_update_warm` or
+    /// `tendon_update_warm_median`.
     pub case: String,
     /// Steps per section.
     pub steps_per_section: u16,
     /// RK4 steps per sweep.
     pub total_steps: u32,
-    /// Instructions (the warm update: its costliest tick).
+    /// Instructions (the warm update: its costliest tick; the median: its median tick).
     pub instructions: u64,
-    /// Sweeps (the warm update: the most of any tick).
+    /// Sweeps (the warm update: the most of any tick; the median: the median tick's).
     pub sweeps: u32,
     /// Whether it converged (the warm update: every tick).
     pub converged: bool,
@@ -150,10 +151,11 @@ pub fn qemu_tendon_cases(text: &str) -> Result<Vec<QemuTendon>, SceneError> {
 }
 
 /// The firmware bench's tendon cases, in the table's order.
-pub const CASES: [&str; 3] = [
+pub const CASES: [&str; 4] = [
     "tendon_forward_cold",
     "tendon_displacement_cold",
     "tendon_update_warm",
+    "tendon_update_warm_median",
 ];
 
 /// One solve of the host's path.
@@ -196,6 +198,17 @@ impl HostPath {
             .reduce(f64::max)?;
         let sweeps = self.warm().iter().map(|t| t.sweeps).max()?;
         Some((time, sweeps))
+    }
+
+    /// The median warm update by host time (the upper one of an even count), and its sweeps.
+    pub fn median_warm(&self) -> Option<(f64, u32)> {
+        let mut warm: Vec<(f64, u32)> = self
+            .warm()
+            .iter()
+            .map(|t| (t.host_time_us, t.sweeps))
+            .collect();
+        warm.sort_by(|a, b| a.0.total_cmp(&b.0));
+        warm.get(warm.len() / 2).copied()
     }
 }
 
@@ -292,9 +305,9 @@ pub fn host_path<T: Scalar>(
 pub struct TendonMcuRow {
     /// What QEMU measured.
     pub qemu: QemuTendon,
-    /// Host f32 sweeps (the warm update: the most of any tick).
+    /// Host f32 sweeps (the warm update: the most of any tick; the median: its median tick's).
     pub host_sweeps: u32,
-    /// Host f32 time, us (the warm update: its costliest tick).
+    /// Host f32 time, us (the warm update: its costliest tick; the median: its median tick).
     pub host_f32_us: f64,
     /// Host f64 time at the same steps, us.
     pub host_f64_us: f64,
@@ -381,6 +394,11 @@ pub fn study(timing: Timing) -> Result<TendonMcu, SceneError> {
                 "tendon_displacement_cold" => p.ticks.first().map_or((0, f64::NAN, false), |t| {
                     (t.sweeps, t.host_time_us, t.converged)
                 }),
+                "tendon_update_warm_median" => p
+                    .median_warm()
+                    .map_or((0, f64::NAN, false), |(time, sweeps)| {
+                        (sweeps, time, p.warm().iter().all(|t| t.converged))
+                    }),
                 _ => p
                     .worst_warm()
                     .map_or((0, f64::NAN, false), |(time, sweeps)| {
@@ -430,7 +448,7 @@ mod tests {
         assert_eq!(ticks.len(), 12);
         assert!(ticks[0].tensions_n[0] > 0.5 && ticks[0].tensions_n[2] == 0.0);
         let cases = qemu_tendon_cases(BENCH_RUN).expect("tendon cases");
-        assert_eq!(cases.len(), 3);
+        assert_eq!(cases.len(), CASES.len());
         assert!(cases.iter().all(|c| c.instructions > 0 && c.sweeps > 0));
         assert!(trajectory("TickReference { tensions_n: [1, 2], tip_m: [0, 0, 0] }").is_err());
         assert!(qemu_tendon_cases("bench case=tendon_forward_cold steps_per_section=20").is_err());
