@@ -14,7 +14,8 @@
 # Installs flip-link, the images' linker, when it is missing (install-tools.sh: `cargo install`,
 # pinned). Needs the thumbv7em-none-eabihf target, qemu-system-arm and readelf (binutils); it
 # installs none of these and says what is missing. Environment:
-# The live link's check builds host-sim (release) in the repository's root workspace.
+# The live link's and the robots' checks run host-sim as the root workspace's tests build it
+# (host-sim/tested.sh: after `cargo test --workspace`, nothing more to build).
 #   UPDATE_EXPECTED=1     rewrite expected/*.size and expected/bench.run from this run
 #   FIRMWARE_BUDGET=report  report an over-budget estimator image without failing
 #   QEMU_TIMEOUT_S=120    bound on each QEMU run
@@ -219,10 +220,25 @@ run_e2e() {
     QEMU_SERIAL="$OUT/e2e.link" run_image e2e 0 '^e2e: [0-9]+ passed, 0 failed$'
 }
 
-# monitor ARGS...: host-sim monitor, built in the root workspace (whose cargo settings are not the
-# firmware's: run from the root), on paths relative to this directory.
+# host_sim_built: finds host-sim as the root workspace's tests build it (whose cargo settings are
+# not the firmware's), into HOST_SIM; building it if needed.
+HOST_SIM=""
+host_sim_built() {
+    HOST_SIM="$(../host-sim/tested.sh)" && echo "$HOST_SIM"
+}
+
+# host_sim ARGS...: that host-sim, run from the root, on paths relative to the root.
+host_sim() {
+    if [[ -z "$HOST_SIM" ]]; then
+        echo "host-sim was not built (see the check that builds it)"
+        return 1
+    fi
+    (cd .. && "$HOST_SIM" "$@")
+}
+
+# monitor ARGS...: host-sim monitor.
 monitor() {
-    (cd .. && cargo run --release --quiet -p host-sim -- monitor "$@")
+    host_sim monitor "$@"
 }
 
 # The e2e image's records, decoded and checked by host-sim against the f64 reference the image
@@ -288,6 +304,7 @@ check "QEMU selftest: model-core self-checks in f32" run_image selftest 0 '^[0-9
 check "QEMU golden: golden rows from cable lengths, tip within 0.1 mm" run_image golden 0 '^golden: [0-9]+ passed, 0 failed$'
 check "QEMU e2e: recorded encoder trajectory against the f64 reference, a record a tick on USART1" run_e2e
 TICKS="$(sed -n 's/^e2e: \([0-9]*\) recorded ticks.*/\1/p' "$OUT/e2e.out" 2>/dev/null || true)"
+check "build host-sim as the workspace's tests do (host-sim/tested.sh)" host_sim_built
 check "live link: host-sim monitor decodes the e2e image's records and checks them against the f64 reference" \
     link_check
 check "live link: one byte damaged in a copy: that frame refused, one record fewer, the check fails" \
@@ -334,8 +351,8 @@ robot_end_to_end() {
         echo "tick,force_x_n,force_y_n,force_z_n"
         sed -n 's/^applied tick=\([0-9]*\) force_n=\(.*\)$/\1,\2/p' "$image.out"
     } >"$image.forces.csv"
-    (cd .. && cargo run --release --quiet -p host-sim -- reference "firmware/$file" \
-        --forces "firmware/$image.forces.csv" --out "firmware/$image.reference.csv") || return 1
+    host_sim reference "firmware/$file" \
+        --forces "firmware/$image.forces.csv" --out "firmware/$image.reference.csv" || return 1
     monitor --input "firmware/$image.link" --check-against "firmware/$image.reference.csv" --quiet
 }
 

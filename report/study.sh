@@ -26,9 +26,19 @@ fi
 mkdir -p "$out" target
 rows="target/study-micromath-rows.json"
 
+# The full study times its rows: release builds. The quick mode (CI's, after the tests) checks the
+# study's findings with host-sim as the workspace's tests built it (host-sim/tested.sh) and the
+# fast-math build in the same profile, so no dependency is built again in release.
+if [ ${#quick[@]} -gt 0 ]; then profile=(--profile test); else profile=(--release); fi
+
 echo "== f32 micromath rows (host-sim built with model-core's fast-math feature)"
-cargo run --release --quiet -p host-sim --features fast-math -- \
+cargo run "${profile[@]}" --quiet -p host-sim --features fast-math -- \
     study "${quick[@]}" --fast-math-only --rows-out "$rows"
 
 echo "== the study, micromath rows merged, into $out"
-cargo run --release --quiet -p host-sim -- study "${quick[@]}" --merge "$rows" --out "$out"
+if [ ${#quick[@]} -gt 0 ]; then
+    # After the fast-math build: finding the tests' binary puts it back in place of that one.
+    "$(host-sim/tested.sh)" study "${quick[@]}" --merge "$rows" --out "$out"
+else
+    cargo run --release --quiet -p host-sim -- study --merge "$rows" --out "$out"
+fi
