@@ -808,6 +808,27 @@ fn tendon_friction_round_trip_and_hysteresis_in_displacement_control() {
         "{:?}",
         unloading.solved.tensions_n
     );
+    // A control loop's warm update at the reversal: the same displacements, the sliding flipped
+    // since the last tick. Its start is the other sliding's answer, not this one's.
+    let warm = model
+        .update_displacements(
+            &set,
+            &d,
+            &TipLoad::zero(),
+            &back,
+            &settings(),
+            &Default::default(),
+        )
+        .unwrap();
+    assert!(warm.is_success(), "{:?}", warm.termination);
+    for (a, b) in warm
+        .solved
+        .tensions_n
+        .iter()
+        .zip(&unloading.solved.tensions_n)
+    {
+        assert!((a - b).abs() < 1e-8, "warm {a} vs cold {b}");
+    }
     // Its equilibrium needs exactly the lengths the spools left.
     for (a, b) in displacements_of(&set, &unloading.solved).iter().zip(&d) {
         assert!((a - b).abs() < 1e-10, "{a} vs {b}");

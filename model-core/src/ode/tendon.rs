@@ -290,7 +290,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut last_step: Option<T> = None;
         let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
-        for _ in 0..MAX_JUMP_ITERATIONS {
+        // One pass beyond the limit, for the tangents of a solve that converged on its last.
+        let mut passes = MAX_JUMP_ITERATIONS;
+        let mut pass = 0;
+        while pass < passes {
+            pass += 1;
             // The tangents ride along when this look-ahead's correction is expected to end the
             // solve, `C |last|^2` with `C` from the last two corrections and a margin of 4. Before
             // two corrections show `C`, a prior: `0.1 / scale`, 25 times the largest measured on
@@ -352,14 +356,17 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             let size = step.norm();
             let stalled =
                 last_step.is_some_and(|last| size >= last * T::lit(0.5)) && contraction.is_some();
+            let prior = last_step;
             contraction = last_step
                 .filter(|last| *last > T::zero())
                 .map(|last| size / (last * last));
             last_step = Some(size);
-            // Done when the correction is at rounding, or (without friction) when the one it
-            // leaves, `C |step|^2`, is.
+            // Done when the correction is at rounding, or (without friction, and converging clearly:
+            // a quarter of the last correction at most) when the one it leaves, `C |step|^2`, is.
+            let converging = prior.is_some_and(|last| size <= last * T::lit(0.25));
             let done = size <= done_at
                 || (!friction
+                    && converging
                     && contraction.is_some_and(|c| T::lit(4.0) * c * size * size <= done_at));
             if !(done || stalled) {
                 continue;
@@ -370,6 +377,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             if count > carried {
                 // Converged on a look-ahead without the tangents: one more, at the answer, with them.
                 contraction = Some(T::zero());
+                passes = passes.max(pass + 1);
                 continue;
             }
             // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`; the next

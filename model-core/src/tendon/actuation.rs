@@ -85,6 +85,10 @@ pub struct DisplacementSolve<T> {
     /// forward solve of a step starts where it predicts, a warm update's too. Zero until a step
     /// was taken.
     pub d_base_d_tension: SMatrix<T, 6, MAX_TENDONS>,
+    /// Each tendon's capstan exponent per radian when this was solved: its friction coefficient,
+    /// signed by its sliding direction ([`Tendons::set_sliding`]). A warm update whose tendons
+    /// slide otherwise solves its start again.
+    pub capstan_per_rad: [T; MAX_TENDONS],
 }
 
 impl<T: Scalar> DisplacementSolve<T> {
@@ -92,6 +96,15 @@ impl<T: Scalar> DisplacementSolve<T> {
     pub fn is_success(&self) -> bool {
         self.termination.is_success() && self.solved.is_success()
     }
+}
+
+/// What a warm update carries into the solve from the previous answer: its sensitivities, and
+/// whether it is this problem's equilibrium (same load and sliding), not to be solved again.
+#[derive(Clone, Copy, Debug)]
+struct Carried<'a, T> {
+    d_length_d_tension: &'a SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+    d_base_d_tension: &'a SMatrix<T, 6, MAX_TENDONS>,
+    same: bool,
 }
 
 /// `(a + b - sqrt(a^2 + b^2))` and its partial derivatives (at the kink, those of the smooth part
@@ -119,9 +132,10 @@ fn base_of<T: Scalar>(eq: &TendonEquilibrium<T>) -> SVector<T, 6> {
     SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
 }
 
-/// The largest predicted move of the base a forward solve starts from, as a fraction of the
-/// moment that bends the rod a radian (a lateral force counted by its moment over the rod's
-/// length; an axial one bends nothing): a tracking step. Beyond it the solve starts from the equilibrium itself: a long linear prediction
+/// The largest predicted move of the base a forward solve starts from: a tracking step, as a
+/// fraction of the moment that bends the rod a radian (a lateral force counted by its moment over
+/// the rod's length) and, for the axial force, of the tension that does through the largest
+/// offset (the compression that buckles the rod between its guides grows with it). Beyond it the solve starts from the equilibrium itself: a long linear prediction
 /// can land Newton on another branch (measured: all three of the bench's tendons taken in 5 cm
 /// from rest, where the start converges nowhere, reached a rod buckled between its guides).
 const PREDICTED_BASE_MOVE: f64 = 0.05;
@@ -136,12 +150,17 @@ fn predict<T: Scalar>(
     tangent: &Vector3<T>,
     length_m: T,
     moment_scale_nm: T,
+    tension_scale_n: T,
 ) -> (Vector3<T>, Vector3<T>) {
     let (force_n, moment_nm) = (at.equilibrium.base_force_n, at.equilibrium.base_moment_nm);
     let moved = d_base * dt;
     let (force, moment) = (moved.fixed_rows::<3>(0), moved.fixed_rows::<3>(3));
-    let lateral = force - tangent * tangent.dot(&force);
-    if lateral.norm() * length_m + moment.norm() > T::lit(PREDICTED_BASE_MOVE) * moment_scale_nm {
+    let axial = tangent.dot(&force);
+    let lateral = force - tangent * axial;
+    let limit = T::lit(PREDICTED_BASE_MOVE);
+    if lateral.norm() * length_m + moment.norm() > limit * moment_scale_nm
+        || axial.abs() > limit * tension_scale_n
+    {
         return (force_n, moment_nm);
     }
     (force_n + force, moment_nm + moment)
@@ -157,6 +176,15 @@ impl<T: Scalar> Tendons<T> {
                 continue;
             };
             *phi = self.home_length_m(j) - *d - *needed;
+        }
+        out
+    }
+
+    /// Each tendon's capstan exponent per radian (zero beyond the last tendon).
+    pub(crate) fn capstans(&self) -> [T; MAX_TENDONS] {
+        let mut out = [T::zero(); MAX_TENDONS];
+        for (c, r) in out.iter_mut().zip(&self.routed) {
+            *c = r.capstan_per_rad;
         }
         out
     }
@@ -214,9 +242,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     }
 
     /// The warm update of a control loop: the tensions for new displacements, from `previous`'s
-    /// equilibrium and its sensitivity (Broyden-updated along the steps; differenced afresh only
-    /// when a step fails). Same outcome as [`Model::solve_displacements`], at a fraction of the
-    /// sweeps.
+    /// equilibrium and its sensitivities (Broyden-updated along the steps; differenced afresh
+    /// when a step fails or gains too little). `previous` must come from this model and these
+    /// tendons (their sliding may have changed since: that is seen). Same outcome as
+    /// [`Model::solve_displacements`], at a fraction of the sweeps.
     pub fn update_displacements(
         &self,
         tendons: &Tendons<T>,
@@ -228,14 +257,25 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     ) -> Result<DisplacementSolve<T>, ModelError> {
         // A failed solve is no start: the update is then a cold one.
         let usable = previous.is_success();
-        let sensitivity = (usable && previous.has_sensitivity)
-            .then_some((&previous.d_length_d_tension, &previous.d_base_d_tension));
+        // The previous answer is this problem's equilibrium at its tensions, not to be solved
+        // again, when the load and every tendon's sliding are the same (`previous` comes from this
+        // model and these tendons: their sliding is the one thing a loop changes between ticks).
+        let same = usable
+            && previous.solved.equilibrium.load == *load
+            && previous.solved.tensions_n.len() == tendons.len()
+            && previous.solved.unstretched_m.len() == tendons.len()
+            && previous.capstan_per_rad == tendons.capstans();
+        let carried = (usable && previous.has_sensitivity).then_some(Carried {
+            d_length_d_tension: &previous.d_length_d_tension,
+            d_base_d_tension: &previous.d_base_d_tension,
+            same,
+        });
         self.displacement_solve(
             tendons,
             displacements_m,
             load,
             usable.then_some(&previous.solved),
-            sensitivity,
+            carried,
             shooting,
             settings,
         )
@@ -248,10 +288,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         displacements_m: &[T],
         load: &TipLoad<T>,
         start: Option<&TendonEquilibrium<T>>,
-        sensitivity_start: Option<(
-            &SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
-            &SMatrix<T, 6, MAX_TENDONS>,
-        )>,
+        carried: Option<Carried<'_, T>>,
         shooting: &ShootingSettings<T>,
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
@@ -271,16 +308,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
         }
         let mut sweeps = 0u32;
-        // A warm update's start is this model's answer at its tensions: under the same load it is
-        // the equilibrium to start from, without solving it again.
-        let same = sensitivity_start.is_some()
-            && start.is_some_and(|s| {
-                s.is_success()
-                    && s.equilibrium.load == *load
-                    && s.tensions_n.len() == count
-                    && s.unstretched_m.len() == count
-                    && s.tensions_n.iter().zip(&tau).all(|(a, b)| a == b)
-            });
+        // A warm update of the same problem starts from its previous answer as it is.
+        let same = carried.is_some_and(|c| c.same);
         let mut current = match start.filter(|_| same) {
             Some(s) => s.clone(),
             None => {
@@ -319,8 +348,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // d N / d tau, and whether it was differenced at the current point (else carried and
         // Broyden-updated).
         let base_tangent = self.rod().base_orientation.column(2).into_owned();
-        let mut sens = sensitivity_start.map(|(s, _)| *s);
-        let mut d_base = sensitivity_start.map_or_else(SMatrix::zeros, |(_, b)| *b);
+        let mut sens = carried.map(|c| *c.d_length_d_tension);
+        let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.d_base_d_tension);
         let mut fresh = false;
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
@@ -380,6 +409,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     &base_tangent,
                     self.length_m(),
                     self.moment_scale_nm(),
+                    tau_scale,
                 );
                 let moved = self.solve_tendons_from(
                     tendons,
@@ -474,6 +504,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             has_sensitivity: sens.is_some(),
             d_length_d_tension: sens.unwrap_or_else(SMatrix::zeros),
             d_base_d_tension: d_base,
+            capstan_per_rad: tendons.capstans(),
         })
     }
 }
