@@ -572,8 +572,9 @@ fn tendon_displacements_no_tension_can_explain_are_refused() {
         run(&[0.5, 0.0, 0.0]).is_err(),
         "more than the tendon's length"
     );
-    // All three taken in by 5 cm: an inextensible set cannot shorten every path that much; the
-    // outcome is a failure, not an answer.
+    // All three taken in by 5 cm: only a rod buckled between its guides shortens every path of an
+    // inextensible set that much, a branch the solve does not leave its own for (unchecked: no
+    // stability test with tendons); the outcome is a failure, not an answer.
     let out = run(&[0.05, 0.05, 0.05]).unwrap();
     assert!(!out.is_success(), "{:?}", out.solved.tensions_n);
 }

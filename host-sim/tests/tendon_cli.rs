@@ -285,9 +285,10 @@ fn tendon_solve_says_its_status_and_tendons_in_every_format() {
     }
 }
 
-/// A displacement solve that finds no tensions (all three taken in 5 cm: no tension shortens
-/// every path that much) and a force-control solve that does not converge: exit 3, no numbers but
-/// the given actuation, in any format.
+/// A displacement solve that finds no tensions (all three taken in 5 cm: only a rod buckled
+/// between its guides shortens every path that much, a branch the solve does not leave its own
+/// for) and a force-control solve that does not converge: exit 3, no numbers but the given
+/// actuation, in any format.
 #[test]
 fn a_failed_tendon_solve_exits_3_and_prints_no_answer() {
     let bench = scene("tendon_bench.toml");
