@@ -66,6 +66,15 @@ impl Scalar for f32 {
     }
 }
 
+/// Two 3-vectors stacked: `top` in rows 0-2, `bottom` in rows 3-5.
+#[inline]
+pub(crate) fn stacked<T: Scalar>(
+    top: &nalgebra::Vector3<T>,
+    bottom: &nalgebra::Vector3<T>,
+) -> nalgebra::SVector<T, 6> {
+    nalgebra::SVector::<T, 6>::new(top.x, top.y, top.z, bottom.x, bottom.y, bottom.z)
+}
+
 /// `true` when every component is finite.
 #[inline]
 pub(crate) fn all_finite<T: Scalar, const R: usize, const C: usize>(

@@ -74,7 +74,7 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize>
     pub(crate) fn unknowns(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> SVector<T, 6> {
         let n = force_n * (self.model.length_m() / self.ei_nm2);
         let m = moment_nm / self.ei_nm2;
-        SVector::<T, 6>::new(n.x, n.y, n.z, m.x, m.y, m.z)
+        crate::scalar::stacked(&n, &m)
     }
 
     /// The base force (N) and moment (N m) of scaled unknowns `x`.
@@ -455,10 +455,7 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<
         let w = pose.map_or(Wrench::zero(), |p| self.loads.wrench(&p, self.alpha));
         let force = (self.load.force_n + dead_f) * self.alpha + w.force_n;
         let moment = (self.load.moment_nm + dead_m) * self.alpha + w.moment_nm;
-        let stack = |f: Vector3<T>, m: Vector3<T>| {
-            let f = f * length;
-            SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
-        };
+        let stack = |f: Vector3<T>, m: Vector3<T>| crate::scalar::stacked(&(f * length), &m);
         for ((e, t), seed) in d.iter_mut().zip(tangents).zip(seeds) {
             let dw = pose.map_or(Wrench::zero(), |p| {
                 self.loads.wrench_change(&p, self.alpha, &Self::change(t))

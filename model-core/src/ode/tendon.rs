@@ -164,8 +164,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
 
     /// `(f L, m)`: a wrench in the units of the scaled residual, N m.
     fn stack(&self, f: &Vector3<T>, m: &Vector3<T>) -> SVector<T, 6> {
-        let f = f * self.model.length_m();
-        SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
+        crate::scalar::stacked(&(f * self.model.length_m()), m)
     }
 
     fn guide_pose(y: &force_state::State<T, A>) -> GuidePose<T> {
@@ -456,8 +455,7 @@ fn pose_delta<T: Scalar>(t: &force_state::Tangent<T>) -> PoseDelta<T> {
 
 /// A pose change stacked: position (m, rows 0-2), rotation (rad, rows 3-5).
 fn stacked<T: Scalar>(d: &PoseDelta<T>) -> SVector<T, 6> {
-    let (p, r) = (&d.position_m, &d.rotation_rad);
-    SVector::<T, 6>::new(p.x, p.y, p.z, r.x, r.y, r.z)
+    crate::scalar::stacked(&d.position_m, &d.rotation_rad)
 }
 
 /// A stacked pose change as a [`PoseDelta`].

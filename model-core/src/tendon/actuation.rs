@@ -126,23 +126,33 @@ fn difference<T: Scalar>(a: &[T; MAX_TENDONS], b: &[T; MAX_TENDONS]) -> SVector<
     })
 }
 
-/// The base's internal force (N) and moment (N m) of an equilibrium, stacked.
-fn base_of<T: Scalar>(eq: &TendonEquilibrium<T>) -> SVector<T, 6> {
-    let (f, m) = (&eq.equilibrium.base_force_n, &eq.equilibrium.base_moment_nm);
-    SVector::<T, 6>::new(f.x, f.y, f.z, m.x, m.y, m.z)
+/// Broyden's rank-one update of `m`, the change of `R` quantities per unit tension, so that it
+/// maps the step `dt` onto the change `dy` it caused (nothing for a zero step). Out of line: its
+/// temporaries stay out of the solve's frame.
+#[inline(never)]
+fn secant<T: Scalar, const R: usize>(
+    m: &mut SMatrix<T, R, MAX_TENDONS>,
+    dy: &SVector<T, R>,
+    dt: &SVector<T, MAX_TENDONS>,
+) {
+    let norm2 = dt.norm_squared();
+    if norm2 > T::zero() {
+        *m += (dy - *m * dt) * dt.transpose() / norm2;
+    }
 }
 
 /// The largest predicted move of the base a forward solve starts from: a tracking step, as a
 /// fraction of the moment that bends the rod a radian (a lateral force counted by its moment over
 /// the rod's length) and, for the axial force, of the tension that does through the largest
-/// offset (the compression that buckles the rod between its guides grows with it). Beyond it the solve starts from the equilibrium itself: a long linear prediction
-/// can land Newton on another branch (measured: all three of the bench's tendons taken in 5 cm
-/// from rest, where the start converges nowhere, reached a rod buckled between its guides).
+/// offset (the compression that buckles the rod between its guides grows with it). Beyond it the
+/// solve starts from the equilibrium itself: a long linear prediction can land Newton on another
+/// branch (measured: all three of the bench's tendons taken in 5 cm from rest, where the start
+/// converges nowhere, reached a rod buckled between its guides).
 const PREDICTED_BASE_MOVE: f64 = 0.05;
 
 /// Where a forward solve at tensions changed by `dt` starts, base force (N) and moment (N m):
-/// `at`'s, moved by `d_base dt` if that move is at most [`PREDICTED_BASE_MOVE`] of
-/// `moment_scale_nm`.
+/// `at`'s, moved by `d_base dt` if that move is within [`PREDICTED_BASE_MOVE`] of
+/// `moment_scale_nm` (bending) and of `tension_scale_n` (axial, along the base `tangent`).
 fn predict<T: Scalar>(
     at: &TendonEquilibrium<T>,
     d_base: &SMatrix<T, 6, MAX_TENDONS>,
@@ -421,39 +431,34 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {
                     let (r_trial, _, _) = residual_of(&moved, &trial);
-                    if r_trial.amax() < size {
-                        accepted = Some((trial, moved));
+                    let r_new = r_trial.amax();
+                    if r_new < size {
+                        accepted = Some((trial, moved, dt, r_new));
                         break;
                     }
                 }
                 alpha *= T::lit(0.5);
             }
             match accepted {
-                Some((trial, moved)) => {
+                Some((trial, moved, dt, r_new)) => {
                     // A carried sensitivity that gained less than a factor four is differenced
                     // afresh next time: Broyden's secants alone converge slowly near the answer,
                     // and differencing costs a forward solve per tendon, a Broyden step one. Not
                     // when the step reached the rounding floor: there is no gain left to see.
-                    let (r_new, _, _) = residual_of(&moved, &trial);
-                    let slow = !fresh && r_new.amax() > size * T::lit(0.25) && r_new.amax() > floor;
+                    let slow = !fresh && r_new > size * T::lit(0.25) && r_new > floor;
                     // Broyden: the secant along the step taken.
-                    let dt = difference(&trial, &tau);
                     let dn = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
                         match (moved.unstretched_m.get(j), current.unstretched_m.get(j)) {
                             (Some(a), Some(b)) => *a - *b,
                             _ => T::zero(),
                         }
                     });
-                    let norm2 = dt.norm_squared();
                     if slow {
                         sens = None;
-                    } else if norm2 > T::zero() {
-                        sens = Some(s + (dn - s * dt) * dt.transpose() / norm2);
+                    } else if let Some(s) = sens.as_mut() {
+                        secant(s, &dn, &dt);
                     }
-                    if norm2 > T::zero() {
-                        let db = base_of(&moved) - base_of(&current);
-                        d_base += (db - d_base * dt) * dt.transpose() / norm2;
-                    }
+                    secant(&mut d_base, &(moved.base() - current.base()), &dt);
                     fresh = false;
                     tau = trial;
                     current = moved;

@@ -38,6 +38,12 @@ impl<T: Scalar> TendonEquilibrium<T> {
     pub fn is_success(&self) -> bool {
         self.equilibrium.report.termination.is_success()
     }
+
+    /// The base's internal force (N, rows 0-2) and moment (N m, rows 3-5), stacked.
+    pub(crate) fn base(&self) -> SVector<T, 6> {
+        let eq = &self.equilibrium;
+        crate::scalar::stacked(&eq.base_force_n, &eq.base_moment_nm)
+    }
 }
 
 impl<T: Scalar> Tendons<T> {
