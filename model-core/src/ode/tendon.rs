@@ -900,8 +900,13 @@ pub(crate) mod tests {
             let err = (fd - j.column(c)).norm() / j.norm();
             worst = worst.max(err);
         }
+        // The tangents are RK4 of the linearised equations over the state's stages: the sweep's
+        // derivative to the scheme's order, not to rounding (the quaternion is normalised after each
+        // step, its tangent is not). On this scene that leaves 1.7-1.9e-7 (relative), the same with
+        // steps of 1e-4 to 1e-7 and before the look-aheads were made cheaper: a discretisation
+        // floor, not the differences' error. Twice that fails a missing or wrong term.
         assert!(
-            worst < 1e-6,
+            worst < 4e-7,
             "mu {mu}: Jacobian off by {worst:e} (relative)"
         );
     }

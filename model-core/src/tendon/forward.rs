@@ -283,11 +283,28 @@ mod tests {
                     "mu {mu} tendon {j}: {unstretched:e} m apart"
                 );
             }
-            // The record answers only for the sweep it saw.
+            // The solve's own last sweep is the one at its answer, so the record answers there
+            // and no shape sweep is taken (the comparison above holds either way).
+            let count = set.guide_s_m.len();
             let record = GuideRecord::new();
             let recording = TendonRod::new(&model, &set, &full, &load, 1.0).recording(&record);
+            let again = crate::solve::solve(&recording, None, &ShootingSettings::default())
+                .map(|s| s.newton.x)
+                .unwrap();
+            // (`x` went through the base force and moment: within an ulp of the solve's.)
+            assert!(
+                (again - x).norm() <= 1e-14 * x.norm(),
+                "mu {mu}: the same solve"
+            );
+            let recorded = record
+                .poses_at(&again, count)
+                .expect("the converged sweep's record");
+            for (a, b) in recorded.iter().zip(&poses).take(count) {
+                let apart = (a.position_m - b.position_m).norm();
+                assert!(apart < 1e-14, "mu {mu}: guide {apart:e} m apart");
+            }
+            // The record answers only for the sweep it saw.
             let _ = crate::sweep::sweep(&recording, &x, crate::sweep::TangentSet::NONE, None);
-            let count = set.guide_s_m.len();
             assert!(record.poses_at(&x, count).is_some());
             assert!(record.poses_at(&(x * 1.001), count).is_none());
             assert!(record.poses_at(&x, count + 1).is_none());
