@@ -53,6 +53,13 @@ pub(crate) struct GuideRecord<T: Scalar> {
     /// Guides passed by the last sweep, in order.
     passed: Cell<usize>,
     poses: [Cell<GuidePose<T>>; MAX_GUIDES],
+    /// Whether sweeps also record how each tendon's path changes along their tangents.
+    paths: bool,
+    /// Tangents the last sweep carried past its guides (0: none, or `paths` is off).
+    tangents: Cell<usize>,
+    /// Each tendon's path change along each tangent: over its chords, `unit(chord) . (dP_k -
+    /// dP_k-1)`, the holes' moves `dP = dp + R (dtheta x d)`.
+    d_path: [Cell<[T; MAX_TANGENTS]>; MAX_TENDONS],
 }
 
 impl<T: Scalar> GuideRecord<T> {
@@ -67,7 +74,32 @@ impl<T: Scalar> GuideRecord<T> {
             alpha: Cell::new(T::zero()),
             passed: Cell::new(0),
             poses: core::array::from_fn(|_| Cell::new(blank)),
+            paths: false,
+            tangents: Cell::new(0),
+            d_path: core::array::from_fn(|_| Cell::new([T::zero(); MAX_TANGENTS])),
         }
+    }
+
+    /// An empty record that also keeps how the paths change along a sweep's tangents.
+    pub(crate) fn with_path_changes() -> Self {
+        Self {
+            paths: true,
+            ..Self::new()
+        }
+    }
+
+    /// Each tendon's path change along the last sweep's six tangents (the unknowns'), if it ran at
+    /// unknowns `x` at full load, carried them, and passed `guides` guides.
+    pub(crate) fn path_changes_at(
+        &self,
+        x: &SVector<T, 6>,
+        guides: usize,
+    ) -> Option<[[T; MAX_TANGENTS]; MAX_TENDONS]> {
+        let whole = self.x.get() == *x
+            && self.alpha.get() == T::one()
+            && self.passed.get() == guides
+            && self.tangents.get() == 6;
+        whole.then(|| self.d_path.each_ref().map(Cell::get))
     }
 
     /// The guides' poses of the last sweep, if it ran at unknowns `x` at full load and passed
@@ -86,6 +118,44 @@ impl<T: Scalar> GuideRecord<T> {
         self.x.set(*x);
         self.alpha.set(alpha);
         self.passed.set(0);
+        if self.paths {
+            self.tangents.set(0);
+            for cell in &self.d_path {
+                cell.set([T::zero(); MAX_TANGENTS]);
+            }
+        }
+    }
+
+    /// The sweep's `tangents` at guide `guide` (pose `cur`, the previous hole's guide or the base
+    /// plate at `prev`): each tendon routed here adds its chord's change along each.
+    fn pass_tangents(
+        &self,
+        guide: usize,
+        prev: &GuidePose<T>,
+        cur: &GuidePose<T>,
+        tangents: &[Tangent<T>],
+        routed: &[Routed<T>],
+    ) {
+        if !self.paths || tangents.is_empty() {
+            return;
+        }
+        self.tangents.set(tangents.len());
+        for (cell, r) in self.d_path.iter().zip(routed) {
+            if guide > r.end_guide {
+                continue;
+            }
+            let chord = (cur.position_m + cur.rotation * r.offset_m)
+                - (prev.position_m + prev.rotation * r.offset_m);
+            let unit = chord / chord.norm();
+            let mut d = cell.get();
+            for (d, t) in d.iter_mut().zip(tangents) {
+                let here = t.rod.p + cur.rotation * t.rod.th.cross(&r.offset_m);
+                let back =
+                    t.prev.position_m + prev.rotation * t.prev.rotation_rad.cross(&r.offset_m);
+                *d += unit.dot(&(here - back));
+            }
+            cell.set(d);
+        }
     }
 
     fn pass(&self, guide: usize, pose: &GuidePose<T>) {
@@ -684,6 +754,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         let cur = Self::guide_pose(&y.rod);
         if let Some(record) = self.record {
             record.pass(guide, &cur);
+            record.pass_tangents(guide, &y.prev, &cur, tangents, &self.tendons.routed);
         }
         let zero = PoseDelta::zero();
         if reads_next(&self.tendons.routed, &y.chord_n, guide) {
@@ -741,6 +812,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             let cur = Self::guide_pose(&y.rod);
             if let Some(record) = self.record {
                 record.pass(guide, &cur);
+                record.pass_tangents(guide, &y.prev, &cur, tangents, &self.tendons.routed);
             }
             let zero = PoseDelta::zero();
             let poses = [&y.prev, &cur, &cur];

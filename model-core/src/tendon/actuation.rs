@@ -17,6 +17,7 @@
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
 
+use super::joint_step::Sensitivities;
 use super::sensitivity::{sensitivity, tension_scale_n};
 use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
 use crate::Scalar;
@@ -120,7 +121,10 @@ fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
 }
 
 /// `a - b`, as a vector.
-fn difference<T: Scalar>(a: &[T; MAX_TENDONS], b: &[T; MAX_TENDONS]) -> SVector<T, MAX_TENDONS> {
+pub(super) fn difference<T: Scalar>(
+    a: &[T; MAX_TENDONS],
+    b: &[T; MAX_TENDONS],
+) -> SVector<T, MAX_TENDONS> {
     SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
         a.get(j).copied().unwrap_or_else(T::zero) - b.get(j).copied().unwrap_or_else(T::zero)
     })
@@ -150,30 +154,110 @@ fn secant<T: Scalar, const R: usize>(
 /// converges nowhere, reached a rod buckled between its guides).
 const PREDICTED_BASE_MOVE: f64 = 0.05;
 
+/// Newton iterations of the forward solve a joint step starts (`joint_step.rs`): from a tracking
+/// start it converges in one or two.
+const JOINT_ITERATIONS: u16 = 3;
+
+/// A base force (N) and moment (N m).
+pub(super) type BaseWrench<T> = (Vector3<T>, Vector3<T>);
+
+/// A tracking step of the base: within [`PREDICTED_BASE_MOVE`] of `moment_scale_nm` (bending)
+/// and of `tension_scale_n` (axial, along the base `tangent`).
+pub(super) struct Tracking<T> {
+    pub tangent: Vector3<T>,
+    pub length_m: T,
+    pub moment_scale_nm: T,
+    pub tension_scale_n: T,
+}
+
+impl<T: Scalar> Tracking<T> {
+    /// Whether a move of the base force (N) and moment (N m) is a tracking step.
+    pub(super) fn allows(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> bool {
+        let axial = self.tangent.dot(force_n);
+        let lateral = force_n - self.tangent * axial;
+        let limit = T::lit(PREDICTED_BASE_MOVE);
+        lateral.norm() * self.length_m + moment_nm.norm() <= limit * self.moment_scale_nm
+            && axial.abs() <= limit * self.tension_scale_n
+    }
+}
+
 /// Where a forward solve at tensions changed by `dt` starts, base force (N) and moment (N m):
-/// `at`'s, moved by `d_base dt` if that move is within [`PREDICTED_BASE_MOVE`] of
-/// `moment_scale_nm` (bending) and of `tension_scale_n` (axial, along the base `tangent`).
-fn predict<T: Scalar>(
-    at: &TendonEquilibrium<T>,
+/// those given, moved by `d_base dt` if that move is a tracking step.
+pub(super) fn predict<T: Scalar>(
+    (force_n, moment_nm): BaseWrench<T>,
     d_base: &SMatrix<T, 6, MAX_TENDONS>,
     dt: &SVector<T, MAX_TENDONS>,
-    tangent: &Vector3<T>,
-    length_m: T,
-    moment_scale_nm: T,
-    tension_scale_n: T,
-) -> (Vector3<T>, Vector3<T>) {
-    let (force_n, moment_nm) = (at.equilibrium.base_force_n, at.equilibrium.base_moment_nm);
+    tracking: &Tracking<T>,
+) -> BaseWrench<T> {
     let moved = d_base * dt;
-    let (force, moment) = (moved.fixed_rows::<3>(0), moved.fixed_rows::<3>(3));
-    let axial = tangent.dot(&force);
-    let lateral = force - tangent * axial;
-    let limit = T::lit(PREDICTED_BASE_MOVE);
-    if lateral.norm() * length_m + moment.norm() > limit * moment_scale_nm
-        || axial.abs() > limit * tension_scale_n
-    {
-        return (force_n, moment_nm);
+    let (force, moment) = (
+        moved.fixed_rows::<3>(0).into_owned(),
+        moved.fixed_rows::<3>(3).into_owned(),
+    );
+    if tracking.allows(&force, &moment) {
+        (force_n + force, moment_nm + moment)
+    } else {
+        (force_n, moment_nm)
     }
-    (force_n + force, moment_nm + moment)
+}
+
+/// The complementarity of tensions and slack for given spool displacements, Fischer-Burmeister:
+/// each tendon's residual `FB(tau / tau_s, phi / r)` and its derivatives.
+pub(super) struct Complementarity<'a, T> {
+    pub tendons: &'a Tendons<T>,
+    pub displacements_m: &'a [T],
+    /// The tension that bends the rod a radian through the largest offset, N.
+    pub tau_scale: T,
+    /// The largest offset, m.
+    pub radius: T,
+}
+
+/// Each tendon's `(d FB / d a, d FB / d b)` at a residual.
+pub(super) type Parts<T> = [(T, T); MAX_TENDONS];
+
+impl<T: Scalar> Complementarity<'_, T> {
+    /// The residual at tensions `tau` when the equilibrium needs the unstretched lengths
+    /// `unstretched_m`, its parts, and the slack.
+    pub(super) fn residual(
+        &self,
+        unstretched_m: &[T],
+        tau: &[T; MAX_TENDONS],
+    ) -> (SVector<T, MAX_TENDONS>, Parts<T>, [T; MAX_TENDONS]) {
+        let phi = self.tendons.slack(self.displacements_m, unstretched_m);
+        let mut r = SVector::<T, MAX_TENDONS>::zeros();
+        let mut parts = [(T::zero(), T::zero()); MAX_TENDONS];
+        for (((r, part), t), p) in r
+            .iter_mut()
+            .zip(parts.iter_mut())
+            .zip(tau)
+            .zip(&phi)
+            .take(self.tendons.len())
+        {
+            let (v, da, db) = fischer_burmeister(*t / self.tau_scale, *p / self.radius);
+            *r = v;
+            *part = (da, db);
+        }
+        (r, parts, phi)
+    }
+
+    /// `d FB / d tau` with the parts of a residual, `d phi / d tau = -s` (`s` the needed
+    /// unstretched lengths' sensitivity to the tensions); identity beyond the tendons.
+    pub(super) fn jacobian(
+        &self,
+        parts: &Parts<T>,
+        s: &SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+    ) -> SMatrix<T, MAX_TENDONS, MAX_TENDONS> {
+        let count = self.tendons.len();
+        SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
+            if j >= count || i >= count {
+                return if i == j { T::one() } else { T::zero() };
+            }
+            let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
+            let d_phi = -s.get((j, i)).copied().unwrap_or_else(T::zero);
+            let d_tau = if i == j { T::one() } else { T::zero() };
+            da * d_tau / self.tau_scale + db * d_phi / self.radius
+        })
+    }
 }
 
 impl<T: Scalar> Tendons<T> {
@@ -335,29 +419,30 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
         };
 
-        let residual_of = |eq: &TendonEquilibrium<T>, tau: &[T; MAX_TENDONS]| {
-            let phi = tendons.slack(displacements_m, &eq.unstretched_m);
-            let mut r = SVector::<T, MAX_TENDONS>::zeros();
-            let mut parts = [(T::zero(), T::zero()); MAX_TENDONS];
-            for (((r, part), t), p) in r
-                .iter_mut()
-                .zip(parts.iter_mut())
-                .zip(tau)
-                .zip(&phi)
-                .take(count)
-            {
-                let (v, da, db) = fischer_burmeister(*t / tau_scale, *p / radius);
-                *r = v;
-                *part = (da, db);
-            }
-            (r, parts, phi)
+        let fb = Complementarity {
+            tendons,
+            displacements_m,
+            tau_scale,
+            radius,
         };
+        let residual_of =
+            |eq: &TendonEquilibrium<T>, tau: &[T; MAX_TENDONS]| fb.residual(&eq.unstretched_m, tau);
 
         let mut termination = Termination::IterationLimit;
         let mut iterations = 0u16;
         // d N / d tau, and whether it was differenced at the current point (else carried and
         // Broyden-updated).
-        let base_tangent = self.rod().base_orientation.column(2).into_owned();
+        let tracking = Tracking {
+            tangent: self.rod().base_orientation.column(2).into_owned(),
+            length_m: self.length_m(),
+            moment_scale_nm: self.moment_scale_nm(),
+            tension_scale_n: tau_scale,
+        };
+        // The joint step (`joint_step.rs`) serves a control loop's tick: a warm update of the same
+        // problem, without capstan friction. Elsewhere the plain steps: the tendon inverse's fit,
+        // which solves again at each trial force, took 14 iterations at a tick of its moving-load
+        // test with them and did not converge within 40 with joint steps.
+        let joint = same && tendons.capstans().iter().all(|c| *c == T::zero());
         let mut sens = carried.map(|c| *c.d_length_d_tension);
         let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.d_base_d_tension);
         let mut fresh = false;
@@ -389,16 +474,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     }
                 },
             };
-            // d FB / d tau, with d phi / d tau = -d (needed unstretched length) / d tau.
-            let jacobian = SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
-                if j >= count || i >= count {
-                    return if i == j { T::one() } else { T::zero() };
-                }
-                let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
-                let d_phi = -s.get((j, i)).copied().unwrap_or_else(T::zero);
-                let d_tau = if i == j { T::one() } else { T::zero() };
-                da * d_tau / tau_scale + db * d_phi / radius
-            });
+            let jacobian = fb.jacobian(&parts, &s);
             let Some(step) = jacobian.lu().solve(&(-r)) else {
                 termination = Termination::Singular;
                 break;
@@ -406,27 +482,52 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             // Backtracking on |r|: the full step, then halves.
             let mut accepted = None;
             let mut alpha = T::one();
-            for _ in 0..12 {
+            // The full step's first trial goes on the tensions and the base together where it can
+            // (`joint_step.rs`); when that trial fails, the plain full step is tried before halves.
+            // (on the update's first step: the tick's; refining steps near the floor are plain)
+            let mut joint_pending = joint && iterations == 1;
+            for _ in 0..13 {
                 let mut trial = tau;
                 for ((t, now), d) in trial.iter_mut().zip(&tau).zip(step.iter()).take(count) {
                     *t = (*now + *d * alpha).max(T::zero());
                 }
-                let dt = difference(&trial, &tau);
-                let predicted = predict(
-                    &current,
-                    &d_base,
-                    &dt,
-                    &base_tangent,
-                    self.length_m(),
-                    self.moment_scale_nm(),
-                    tau_scale,
+                let mut dt = difference(&trial, &tau);
+                let anchor = (
+                    current.equilibrium.base_force_n,
+                    current.equilibrium.base_moment_nm,
                 );
+                let mut predicted = predict(anchor, &d_base, &dt, &tracking);
+                let mut forward = *shooting;
+                let jointed = core::mem::take(&mut joint_pending) && {
+                    let carried = Sensitivities {
+                        d_length_d_tension: &s,
+                        d_base_d_tension: &d_base,
+                    };
+                    let (spent, stepped) = self.joint_step(
+                        tendons, load, &fb, &trial, predicted, anchor, &carried, &tracking,
+                    );
+                    sweeps += spent;
+                    stepped.is_some_and(|j| {
+                        (trial, predicted) = (j.tensions_n, j.base);
+                        dt = difference(&trial, &tau);
+                        true
+                    })
+                };
+                if jointed {
+                    // A joint start converges in a sweep or two where the step is a tracking
+                    // one; otherwise the plain step is taken instead (no cold start from here).
+                    forward = ShootingSettings {
+                        max_iterations: JOINT_ITERATIONS,
+                        cold_fallback: false,
+                        ..forward
+                    };
+                }
                 let moved = self.solve_tendons_from(
                     tendons,
                     trial.get(..count).unwrap_or(&[]),
                     load,
                     Some(predicted),
-                    shooting,
+                    &forward,
                 )?;
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {
@@ -437,7 +538,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         break;
                     }
                 }
-                alpha *= T::lit(0.5);
+                if !jointed {
+                    alpha *= T::lit(0.5);
+                }
             }
             match accepted {
                 Some((trial, moved, dt, r_new)) => {

@@ -29,6 +29,7 @@ pub(crate) mod distributed;
 mod forward;
 pub(crate) mod guide_force;
 mod inverse;
+mod joint_step;
 mod paths;
 mod pcc;
 mod sensitivity;

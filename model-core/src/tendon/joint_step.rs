@@ -1,0 +1,207 @@
+//! A displacement step on the tensions and the base together (MODEL.md §6.3): one sweep at the
+//! forward solve's predicted start gives the tip condition's residual `r` and Jacobian `J` there,
+//! and how the tendons' paths change along its tangents; with the carried sensitivities that is
+//! a Newton step on both, so that the forward solve at the corrected tensions starts converged
+//! and the displacement step confirms in one more sweep instead of two.
+//!
+//! At tensions `tau` and the predicted base `x_p`, `dx = -J^-1 r` is the forward solve's own
+//! Newton step; the unstretched lengths it leads to are `N + (dN/dpath)(dpath/dx) dx` (the paths'
+//! changes recorded by the sweep, `GuideRecord::path_changes_at`). The tensions' step `dtau`
+//! solves the complementarity linearised there with the carried `dN/dtau`, and the base moves on
+//! by the carried `d_base dtau` (at a fixed base the tip condition changes by `-J d_base dtau`,
+//! so both hold to first order). The forward solve from there decides: its equilibrium is the
+//! step's, checked as every step's is. Frictionless only: with capstan friction the chords'
+//! tensions read the wrap angles, whose changes the sweep does not record.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::actuation::{BaseWrench, Complementarity, Tracking, difference};
+use super::paths::lengths;
+use super::{MAX_TENDONS, Tendons};
+use crate::Scalar;
+use crate::kinematics::Attitude;
+use crate::loads::TipLoad;
+use crate::model::Model;
+use crate::ode::tendon::{GuideRecord, TendonRod};
+use crate::sweep::{TangentSet, sweep};
+
+/// Where a joint step leads: the tensions, N, and the forward solve's start there, base force (N)
+/// and moment (N m).
+pub(super) struct JointStep<T> {
+    pub tensions_n: [T; MAX_TENDONS],
+    pub base: BaseWrench<T>,
+}
+
+/// The carried sensitivities a joint step reads: the needed unstretched lengths' and the base's
+/// to the tensions (see [`super::DisplacementSolve`]).
+pub(super) struct Sensitivities<'a, T> {
+    pub d_length_d_tension: &'a SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
+    pub d_base_d_tension: &'a SMatrix<T, 6, MAX_TENDONS>,
+}
+
+impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
+    /// The joint step from tensions `tau` (each at least zero) and the base `start` (force N,
+    /// moment N m) predicted from the last equilibrium's, `anchor`. Returns the sweeps spent (one)
+    /// and the step: `None` where the sweep or a linear solve fails, or where the forward solve
+    /// would start more than a `tracking` step from `anchor` (the bound on the plain step's
+    /// prediction too: a longer move could start it on another branch). The caller then takes
+    /// its plain step.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn joint_step(
+        &self,
+        tendons: &Tendons<T>,
+        load: &TipLoad<T>,
+        fb: &Complementarity<'_, T>,
+        tau: &[T; MAX_TENDONS],
+        start: BaseWrench<T>,
+        anchor: BaseWrench<T>,
+        carried: &Sensitivities<'_, T>,
+        tracking: &Tracking<T>,
+    ) -> (u32, Option<JointStep<T>>) {
+        let record = GuideRecord::with_path_changes();
+        let ode = TendonRod::new(self, tendons, tau, load, T::one()).recording(&record);
+        let x = ode.unknowns(&start.0, &start.1);
+        let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
+        // The forward solve's Newton step at these tensions.
+        let dx = sw
+            .finite
+            .then(|| sw.jacobian().lu().solve(&(-sw.residual)))
+            .flatten()
+            .filter(crate::scalar::all_finite);
+        let step = dx.and_then(|dx| {
+            self.joint_from(
+                tendons, fb, tau, carried, tracking, anchor, &ode, &record, &x, &dx,
+            )
+        });
+        (1, step)
+    }
+
+    /// The joint step after its sweep at `x` (kept in `record`), from the base's Newton step `dx`.
+    /// Out of line: its buffers (the guides' poses, the complementarity's Jacobian) stay out of
+    /// the sweep's frame.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn joint_from(
+        &self,
+        tendons: &Tendons<T>,
+        fb: &Complementarity<'_, T>,
+        tau: &[T; MAX_TENDONS],
+        carried: &Sensitivities<'_, T>,
+        tracking: &Tracking<T>,
+        (anchor_force_n, anchor_moment_nm): BaseWrench<T>,
+        ode: &TendonRod<'_, T, A, NODES>,
+        record: &GuideRecord<T>,
+        x: &SVector<T, 6>,
+        dx: &SVector<T, 6>,
+    ) -> Option<JointStep<T>> {
+        let count = tendons.len();
+        let guides = tendons.guide_s_m.len();
+        let d_path = record.path_changes_at(x, guides)?;
+        let poses = record.poses_at(x, guides)?;
+        let rod = self.rod();
+        let now = lengths(
+            tendons,
+            tau.get(..count)?,
+            &rod.base_position_m,
+            &rod.base_orientation,
+            poses.get(..guides)?,
+        )?;
+        // The unstretched lengths after the base's step, and the complementarity's Newton step
+        // there.
+        let mut needed = now.unstretched_m;
+        for (((n, d), t), tension) in needed
+            .iter_mut()
+            .zip(&d_path)
+            .zip(tendons.tendons())
+            .zip(tau)
+        {
+            let moved = d
+                .iter()
+                .zip(dx.iter())
+                .fold(T::zero(), |a, (d, x)| a + *d * *x);
+            *n += t.unstretched_m(moved, *tension);
+        }
+        let (r, parts, _) = fb.residual(needed.get(..count)?, tau);
+        let dtau = fb
+            .jacobian(&parts, carried.d_length_d_tension)
+            .lu()
+            .solve(&(-r))?;
+        let mut tensions_n = *tau;
+        for (t, d) in tensions_n.iter_mut().zip(dtau.iter()).take(count) {
+            *t = (*t + *d).max(T::zero());
+        }
+        if !tensions_n.iter().all(|t| t.is_finite()) {
+            return None;
+        }
+        // Where the forward solve starts: the base after its Newton step, moved on by the
+        // tensions' step, within a tracking step of the last equilibrium's.
+        let moved = carried.d_base_d_tension * difference(&tensions_n, tau);
+        let (_, force_n, moment_nm) = ode.base(&(x + dx));
+        let force_n = force_n + moved.fixed_rows::<3>(0);
+        let moment_nm = moment_nm + moved.fixed_rows::<3>(3);
+        if !tracking.allows(&(force_n - anchor_force_n), &(moment_nm - anchor_moment_nm)) {
+            return None;
+        }
+        let base = (force_n, moment_nm);
+        Some(JointStep { tensions_n, base })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector3;
+
+    use super::*;
+    use crate::ode::RodOde;
+
+    /// The paths' changes a recording sweep keeps along its six tangents are the paths'
+    /// derivatives: central differences of the paths of plain sweeps, for a tendon ending mid-way
+    /// and one at the tip. A plain sweep keeps none.
+    #[test]
+    fn tendon_path_changes_match_finite_differences() {
+        let (model, tendons) = crate::ode::tendon::tests::scene();
+        let tendons = Tendons::new(&model, &tendons).unwrap();
+        let mut tau = [0.0; MAX_TENDONS];
+        tau[0] = 2.0;
+        tau[1] = 1.5;
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        let guides = tendons.guide_s_m.len();
+        let rod = model.rod();
+        let record = GuideRecord::with_path_changes();
+        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0).recording(&record);
+        let x = ode.guess() * 0.7;
+        assert!(sweep(&ode, &x, TangentSet::unknowns(false), None).finite);
+        let d = record.path_changes_at(&x, guides).unwrap();
+        let paths = |x: &SVector<f64, 6>| {
+            let plain = GuideRecord::with_path_changes();
+            let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0).recording(&plain);
+            assert!(sweep(&ode, x, TangentSet::NONE, None).finite);
+            assert!(plain.path_changes_at(x, guides).is_none());
+            let poses = plain.poses_at(x, guides).unwrap();
+            lengths(
+                &tendons,
+                &tau[..2],
+                &rod.base_position_m,
+                &rod.base_orientation,
+                &poses[..guides],
+            )
+            .unwrap()
+            .path_m
+        };
+        let scale = d.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        let h = 1e-6;
+        let mut worst = 0.0f64;
+        for k in 0..6 {
+            let mut dx = SVector::<f64, 6>::zeros();
+            dx[k] = h;
+            let (plus, minus) = (paths(&(x + dx)), paths(&(x - dx)));
+            for j in 0..2 {
+                let fd = (plus[j] - minus[j]) / (2.0 * h);
+                worst = worst.max((fd - d[j][k]).abs() / scale);
+            }
+        }
+        // The same discretisation floor as the sweep's Jacobian (`ode/tendon.rs`): 2.7e-7 here,
+        // the same with steps of 1e-4 to 1e-6; leaving out the previous hole's turn fails by 0.6.
+        assert!(worst < 5e-7, "path changes off by {worst:e} (relative)");
+    }
+}
