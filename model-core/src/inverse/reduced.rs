@@ -278,6 +278,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize>
             max_step_rad: self.settings.max_rotation_step_rad,
             max_iterations: PROJECTION_ITERATIONS,
             tangents: self.tangents(),
+            plain_first: false,
         };
         let mut inner = Work::default();
         let (_, termination) =

@@ -45,6 +45,7 @@ where
         max_step_rad: settings.max_rotation_step_rad,
         max_iterations: settings.max_iterations.min(CORRECTOR_ITERATIONS),
         tangents: TangentSet::unknowns(true),
+        plain_first: false,
     };
     let trust = T::lit(PREDICTOR_TRUST_RAD) / ode.length_m();
     while *load_steps < settings.max_load_steps {

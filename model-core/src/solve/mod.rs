@@ -119,6 +119,22 @@ pub(crate) fn solve<T: Scalar, O: RodOde<T, K>, const K: usize>(
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
+    solve_from(ode, start, settings, false)
+}
+
+/// [`solve`] from a start expected to be the answer (`plain_first`): its first sweep goes without
+/// tangents and ends the solve when it meets the tolerance (see [`NewtonOptions::plain_first`]).
+/// Only for equations without a stability test, whose verdict needs no tangents.
+#[inline(never)]
+pub(crate) fn solve_from<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    start: Option<SVector<T, K>>,
+    settings: &ShootingSettings<T>,
+    plain_first: bool,
+) -> Result<Solved<T, K>, Failed>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
     let mut work = Work::default();
     let mut load_steps = 0u16;
     let length = ode.length_m();
@@ -167,6 +183,7 @@ where
             max_step_rad: settings.max_rotation_step_rad,
             max_iterations: direct_iterations,
             tangents: TangentSet::unknowns(settings.check_stability),
+            plain_first: plain_first && start.is_some() && !ode.has_stability_test(),
         };
         let mut out = newton(ode, direct_start, None, &options, &mut work);
         let stability = check(&mut out);

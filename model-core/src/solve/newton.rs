@@ -40,6 +40,9 @@ pub(crate) struct NewtonOptions<T> {
     pub max_iterations: u16,
     /// The tangents each sweep carries (at least the unknowns').
     pub tangents: TangentSet,
+    /// Whether the start is expected to be the answer: its sweep goes without tangents and ends
+    /// the solve when it meets the tolerance (otherwise the start is swept again with them).
+    pub plain_first: bool,
 }
 
 /// Rejected steps tolerated in a row before the solve is declared stalled.
@@ -68,19 +71,52 @@ where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
     let mut x = start;
+    let plain_first = first.is_none() && options.plain_first;
     let mut sw = match first {
         Some(sw) => *sw,
         None => {
             work.sweep();
-            sweep(ode, &x, options.tangents, None)
+            let which = if plain_first {
+                TangentSet::NONE
+            } else {
+                options.tangents
+            };
+            sweep(ode, &x, which, None)
         }
     };
+    if plain_first {
+        if sw.finite && converged(ode, &sw, &x, options) {
+            return Newton {
+                x,
+                residual: ode.residual_size(&sw.residual),
+                sweep: sw,
+                termination: Termination::Converged,
+            };
+        }
+        work.sweep();
+        sw = sweep(ode, &x, options.tangents, None);
+    }
     let (residual, termination) = newton_in_place(ode, &mut x, &mut sw, options, work);
     Newton {
         x,
         sweep: sw,
         residual,
         termination,
+    }
+}
+
+/// Whether the sweep `sw` at unknowns `x` meets the options' tolerance.
+fn converged<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    sw: &Sweep<T, K>,
+    x: &SVector<T, K>,
+    options: &NewtonOptions<T>,
+) -> bool {
+    let size = ode.residual_size(&sw.residual);
+    if options.to_rounding {
+        stopping::residual_converged(size, ode.rotation_rad(x), options.tolerance)
+    } else {
+        size <= options.tolerance
     }
 }
 
@@ -107,14 +143,7 @@ where
     }
     let length = ode.length_m();
     let tolerance = options.tolerance;
-    let converged = |sw: &Sweep<T, K>, x: &SVector<T, K>| {
-        let size = ode.residual_size(&sw.residual);
-        if options.to_rounding {
-            stopping::residual_converged(size, ode.rotation_rad(x), tolerance)
-        } else {
-            size <= tolerance
-        }
-    };
+    let converged = |sw: &Sweep<T, K>, x: &SVector<T, K>| converged(ode, sw, x, options);
     let mut residual = ode.residual_size(&sw.residual);
     let max_step = options.max_step_rad / length;
     let mut mu = T::zero();

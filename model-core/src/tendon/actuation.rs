@@ -171,13 +171,21 @@ pub(super) struct Tracking<T> {
 }
 
 impl<T: Scalar> Tracking<T> {
-    /// Whether a move of the base force (N) and moment (N m) is a tracking step.
-    pub(super) fn allows(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> bool {
+    /// A move of the base force (N) and moment (N m) in these scales: bending and axial.
+    pub(super) fn size(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> (T, T) {
         let axial = self.tangent.dot(force_n);
         let lateral = force_n - self.tangent * axial;
+        (
+            (lateral.norm() * self.length_m + moment_nm.norm()) / self.moment_scale_nm,
+            axial.abs() / self.tension_scale_n,
+        )
+    }
+
+    /// Whether a move of the base force (N) and moment (N m) is a tracking step.
+    pub(super) fn allows(&self, force_n: &Vector3<T>, moment_nm: &Vector3<T>) -> bool {
+        let (bending, axial) = self.size(force_n, moment_nm);
         let limit = T::lit(PREDICTED_BASE_MOVE);
-        lateral.norm() * self.length_m + moment_nm.norm() <= limit * self.moment_scale_nm
-            && axial.abs() <= limit * self.tension_scale_n
+        bending <= limit && axial <= limit
     }
 }
 
@@ -498,6 +506,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 );
                 let mut predicted = predict(anchor, &d_base, &dt, &tracking);
                 let mut forward = *shooting;
+                // Whether the joint start is expected converged: its first sweep then goes without
+                // tangents (`JointStep::expected_residual` within the forward solve's tolerance).
+                let mut confirm = false;
                 let jointed = core::mem::take(&mut joint_pending) && {
                     let carried = Sensitivities {
                         d_length_d_tension: &s,
@@ -510,6 +521,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     stepped.is_some_and(|j| {
                         (trial, predicted) = (j.tensions_n, j.base);
                         dt = difference(&trial, &tau);
+                        confirm = j.expected_residual <= shooting.tolerance;
                         true
                     })
                 };
@@ -528,6 +540,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     load,
                     Some(predicted),
                     &forward,
+                    confirm,
                 )?;
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {

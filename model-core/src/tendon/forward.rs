@@ -100,10 +100,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let start = start
             .filter(|s| s.is_success())
             .map(|s| (s.equilibrium.base_force_n, s.equilibrium.base_moment_nm));
-        self.solve_tendons_from(tendons, tensions_n, load, start, settings)
+        self.solve_tendons_from(tendons, tensions_n, load, start, settings, false)
     }
 
-    /// [`Model::solve_tendons`] from a base force (N) and moment (N m), or cold.
+    /// [`Model::solve_tendons`] from a base force (N) and moment (N m), or cold; `confirm`: the
+    /// start is expected to be the answer, its first sweep goes without tangents
+    /// (`crate::solve::solve_from`).
     pub(crate) fn solve_tendons_from(
         &self,
         tendons: &Tendons<T>,
@@ -111,6 +113,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         load: &TipLoad<T>,
         start: Option<(Vector3<T>, Vector3<T>)>,
         settings: &ShootingSettings<T>,
+        confirm: bool,
     ) -> Result<TendonEquilibrium<T>, ModelError> {
         tendons.check_model(self)?;
         let tau = tendons.check_tensions(tensions_n)?;
@@ -126,7 +129,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
             None => None,
         };
-        let outcome = crate::solve::solve(&ode, start, settings);
+        let outcome = crate::solve::solve_from(&ode, start, settings, confirm);
         let x = outcome.as_ref().ok().map(|s| s.newton.x);
         let mut eq = equilibrium(load, 0, outcome, |x| ode.base(x));
         let mut tensions = Vec::new();
@@ -242,6 +245,47 @@ mod tests {
             t.feed_length_m = 0.4;
         }
         (model, tendons)
+    }
+
+    /// A solve started at its answer and expected converged takes one sweep (without tangents:
+    /// `expected/bench.run`'s median warm update counts it); one expected converged that is not
+    /// takes one sweep more than the usual solve from there and reaches the same answer.
+    #[test]
+    fn tendon_confirming_solve_takes_one_sweep_at_the_answer() {
+        let (model, tendons) = scene(0.0);
+        let set = Tendons::new(&model, &tendons).unwrap();
+        let tau = [2.0, 1.2];
+        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+        let settings = ShootingSettings::default();
+        let solved = model
+            .solve_tendons(&set, &tau, &load, None, &settings)
+            .unwrap();
+        let eq = &solved.equilibrium;
+        let at = (eq.base_force_n, eq.base_moment_nm);
+        let off = (eq.base_force_n * 1.01, eq.base_moment_nm);
+        for start in [at, off] {
+            let again = model
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, true)
+                .unwrap();
+            let usual = model
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, false)
+                .unwrap();
+            assert!(again.is_success(), "{:?}", again.equilibrium.report);
+            // At the answer the plain sweep confirms (the usual solve's sweep carries tangents);
+            // off it, the plain sweep is one more.
+            let more = if start == at { 0 } else { 1 };
+            assert_eq!(
+                usual.equilibrium.report.sweeps,
+                if start == at { 1 } else { 4 }
+            );
+            assert_eq!(
+                again.equilibrium.report.sweeps,
+                usual.equilibrium.report.sweeps + more
+            );
+            let apart = (again.equilibrium.tip_position_m - eq.tip_position_m).norm();
+            assert!(apart < 1e-12, "tips {apart:e} m apart");
+            assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);
+        }
     }
 
     /// The paths a solve reads from its converged sweep's guides are those of a shape sweep at

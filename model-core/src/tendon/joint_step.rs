@@ -30,6 +30,13 @@ use crate::sweep::{TangentSet, sweep};
 pub(super) struct JointStep<T> {
     pub tensions_n: [T; MAX_TENDONS],
     pub base: BaseWrench<T>,
+    /// The residual expected at the start (dimensionless, as the forward solve's tolerance): the
+    /// squares of the base's Newton step, `|dx| L`, and of the tensions' move of the base in
+    /// tracking scales (Newton's quadratic convergence; a carried sensitivity's error grows with
+    /// the move). Where it is within the tolerance the forward solve's first sweep goes without
+    /// tangents (at a tendon's change of state, the Newton step's square alone promised a
+    /// converged start that was not).
+    pub expected_residual: T,
 }
 
 /// The carried sensitivities a joint step reads: the needed unstretched lengths' and the base's
@@ -142,8 +149,16 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         if !tracking.allows(&(force_n - anchor_force_n), &(moment_nm - anchor_moment_nm)) {
             return None;
         }
-        let base = (force_n, moment_nm);
-        Some(JointStep { tensions_n, base })
+        let newton_rad = dx.norm() * self.length_m();
+        let (bending, axial) = tracking.size(
+            &moved.fixed_rows::<3>(0).into_owned(),
+            &moved.fixed_rows::<3>(3).into_owned(),
+        );
+        Some(JointStep {
+            tensions_n,
+            base: (force_n, moment_nm),
+            expected_residual: newton_rad * newton_rad + bending * bending + axial * axial,
+        })
     }
 }
 
