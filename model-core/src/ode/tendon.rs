@@ -53,82 +53,50 @@ pub(crate) struct GuideRecord<T: Scalar> {
     /// Guides passed by the last sweep, in order.
     passed: Cell<usize>,
     poses: [Cell<GuidePose<T>>; MAX_GUIDES],
-    /// Whether sweeps also record how each tendon's path changes along their tangents.
-    paths: bool,
-    /// Tangents the last sweep carried past its guides (0: none, or `paths` is off).
+}
+
+/// How each tendon's path changed along the tangents of the last sweep that carried some (a
+/// joint displacement step's, `tendon/joint_step.rs`): kept beside a [`GuideRecord`], which says
+/// where that sweep was.
+#[derive(Debug)]
+pub(crate) struct PathChanges<T: Scalar> {
+    /// Tangents the last sweep carried past its guides (0: none).
     tangents: Cell<usize>,
     /// Each tendon's path change along each tangent: over its chords, `unit(chord) . (dP_k -
     /// dP_k-1)`, the holes' moves `dP = dp + R (dtheta x d)`.
     d_path: [Cell<[T; MAX_TANGENTS]>; MAX_TENDONS],
 }
 
-impl<T: Scalar> GuideRecord<T> {
-    /// An empty record.
+impl<T: Scalar> PathChanges<T> {
     pub(crate) fn new() -> Self {
-        let blank = GuidePose {
-            position_m: Vector3::zeros(),
-            rotation: nalgebra::Matrix3::identity(),
-        };
         Self {
-            x: Cell::new(SVector::zeros()),
-            alpha: Cell::new(T::zero()),
-            passed: Cell::new(0),
-            poses: core::array::from_fn(|_| Cell::new(blank)),
-            paths: false,
             tangents: Cell::new(0),
             d_path: core::array::from_fn(|_| Cell::new([T::zero(); MAX_TANGENTS])),
         }
     }
 
-    /// An empty record that also keeps how the paths change along a sweep's tangents.
-    pub(crate) fn with_path_changes() -> Self {
-        Self {
-            paths: true,
-            ..Self::new()
-        }
-    }
-
-    /// Each tendon's path change along the last sweep's six tangents (the unknowns'), if it ran at
-    /// unknowns `x` at full load, carried them, and passed `guides` guides.
-    pub(crate) fn path_changes_at(
+    /// Each tendon's path change along the six tangents (the unknowns') of the sweep `record`
+    /// holds, if it ran at unknowns `x` at full load, passed `guides` guides and carried them.
+    pub(crate) fn at(
         &self,
+        record: &GuideRecord<T>,
         x: &SVector<T, 6>,
         guides: usize,
     ) -> Option<[[T; MAX_TANGENTS]; MAX_TENDONS]> {
-        let whole = self.x.get() == *x
-            && self.alpha.get() == T::one()
-            && self.passed.get() == guides
-            && self.tangents.get() == 6;
+        let whole = record.holds(x, guides) && self.tangents.get() == 6;
         whole.then(|| self.d_path.each_ref().map(Cell::get))
     }
 
-    /// The guides' poses of the last sweep, if it ran at unknowns `x` at full load and passed
-    /// `guides` guides.
-    pub(crate) fn poses_at(
-        &self,
-        x: &SVector<T, 6>,
-        guides: usize,
-    ) -> Option<[GuidePose<T>; MAX_GUIDES]> {
-        let whole =
-            self.x.get() == *x && self.alpha.get() == T::one() && self.passed.get() == guides;
-        whole.then(|| self.poses.each_ref().map(Cell::get))
-    }
-
-    fn start(&self, x: &SVector<T, 6>, alpha: T) {
-        self.x.set(*x);
-        self.alpha.set(alpha);
-        self.passed.set(0);
-        if self.paths {
-            self.tangents.set(0);
-            for cell in &self.d_path {
-                cell.set([T::zero(); MAX_TANGENTS]);
-            }
+    fn start(&self) {
+        self.tangents.set(0);
+        for cell in &self.d_path {
+            cell.set([T::zero(); MAX_TANGENTS]);
         }
     }
 
     /// The sweep's `tangents` at guide `guide` (pose `cur`, the previous hole's guide or the base
     /// plate at `prev`): each tendon routed here adds its chord's change along each.
-    fn pass_tangents(
+    fn pass(
         &self,
         guide: usize,
         prev: &GuidePose<T>,
@@ -136,7 +104,7 @@ impl<T: Scalar> GuideRecord<T> {
         tangents: &[Tangent<T>],
         routed: &[Routed<T>],
     ) {
-        if !self.paths || tangents.is_empty() {
+        if tangents.is_empty() {
             return;
         }
         self.tangents.set(tangents.len());
@@ -157,6 +125,44 @@ impl<T: Scalar> GuideRecord<T> {
             cell.set(d);
         }
     }
+}
+
+impl<T: Scalar> GuideRecord<T> {
+    /// An empty record.
+    pub(crate) fn new() -> Self {
+        let blank = GuidePose {
+            position_m: Vector3::zeros(),
+            rotation: nalgebra::Matrix3::identity(),
+        };
+        Self {
+            x: Cell::new(SVector::zeros()),
+            alpha: Cell::new(T::zero()),
+            passed: Cell::new(0),
+            poses: core::array::from_fn(|_| Cell::new(blank)),
+        }
+    }
+
+    /// The guides' poses of the last sweep, if it ran at unknowns `x` at full load and passed
+    /// `guides` guides.
+    pub(crate) fn poses_at(
+        &self,
+        x: &SVector<T, 6>,
+        guides: usize,
+    ) -> Option<[GuidePose<T>; MAX_GUIDES]> {
+        self.holds(x, guides)
+            .then(|| self.poses.each_ref().map(Cell::get))
+    }
+
+    /// Whether the last sweep ran at unknowns `x` at full load and passed `guides` guides.
+    fn holds(&self, x: &SVector<T, 6>, guides: usize) -> bool {
+        self.x.get() == *x && self.alpha.get() == T::one() && self.passed.get() == guides
+    }
+
+    fn start(&self, x: &SVector<T, 6>, alpha: T) {
+        self.x.set(*x);
+        self.alpha.set(alpha);
+        self.passed.set(0);
+    }
 
     fn pass(&self, guide: usize, pose: &GuidePose<T>) {
         if let Some(cell) = self.poses.get(guide) {
@@ -176,6 +182,7 @@ pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
     model: &'a Model<T, A, NODES>,
     tendons: &'a Tendons<T>,
     record: Option<&'a GuideRecord<T>>,
+    paths: Option<&'a PathChanges<T>>,
     /// Full tensions, N.
     tensions_n: [T; MAX_TENDONS],
     /// Tensions at the load scale, N.
@@ -205,6 +212,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             model,
             tendons,
             record: None,
+            paths: None,
             tensions_n: *tensions_n,
             scaled_n: tensions_n.map(|t| t * alpha),
         }
@@ -214,6 +222,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     pub(crate) fn recording(self, record: &'a GuideRecord<T>) -> Self {
         Self {
             record: Some(record),
+            ..self
+        }
+    }
+
+    /// These equations, keeping in `paths` how the tendons' paths change along each sweep's
+    /// tangents.
+    pub(crate) fn tracing_paths(self, paths: &'a PathChanges<T>) -> Self {
+        Self {
+            paths: Some(paths),
             ..self
         }
     }
@@ -646,6 +663,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         if let Some(record) = self.record {
             record.start(x, self.rod.alpha());
         }
+        if let Some(paths) = self.paths {
+            paths.start();
+        }
         let rod = self.model.rod();
         State {
             rod: self.rod.start(x),
@@ -754,7 +774,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         let cur = Self::guide_pose(&y.rod);
         if let Some(record) = self.record {
             record.pass(guide, &cur);
-            record.pass_tangents(guide, &y.prev, &cur, tangents, &self.tendons.routed);
+        }
+        if let Some(paths) = self.paths {
+            paths.pass(guide, &y.prev, &cur, tangents, &self.tendons.routed);
         }
         let zero = PoseDelta::zero();
         if reads_next(&self.tendons.routed, &y.chord_n, guide) {
@@ -812,7 +834,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             let cur = Self::guide_pose(&y.rod);
             if let Some(record) = self.record {
                 record.pass(guide, &cur);
-                record.pass_tangents(guide, &y.prev, &cur, tangents, &self.tendons.routed);
+            }
+            if let Some(paths) = self.paths {
+                paths.pass(guide, &y.prev, &cur, tangents, &self.tendons.routed);
             }
             let zero = PoseDelta::zero();
             let poses = [&y.prev, &cur, &cur];

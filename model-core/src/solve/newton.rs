@@ -42,6 +42,7 @@ pub(crate) struct NewtonOptions<T> {
     pub tangents: TangentSet,
     /// Whether the start is expected to be the answer: its sweep goes without tangents and ends
     /// the solve when it meets the tolerance (otherwise the start is swept again with them).
+    /// Ignored when the caller passes the start's sweep.
     pub plain_first: bool,
 }
 

@@ -190,23 +190,22 @@ impl<T: Scalar> Tracking<T> {
 }
 
 /// Where a forward solve at tensions changed by `dt` starts, base force (N) and moment (N m):
-/// those given, moved by `d_base dt` if that move is a tracking step.
+/// those given, moved by `d_base dt`, if that move is a tracking step (else `None`: the solve
+/// starts from those given).
 pub(super) fn predict<T: Scalar>(
     (force_n, moment_nm): BaseWrench<T>,
     d_base: &SMatrix<T, 6, MAX_TENDONS>,
     dt: &SVector<T, MAX_TENDONS>,
     tracking: &Tracking<T>,
-) -> BaseWrench<T> {
+) -> Option<BaseWrench<T>> {
     let moved = d_base * dt;
     let (force, moment) = (
         moved.fixed_rows::<3>(0).into_owned(),
         moved.fixed_rows::<3>(3).into_owned(),
     );
-    if tracking.allows(&force, &moment) {
-        (force_n + force, moment_nm + moment)
-    } else {
-        (force_n, moment_nm)
-    }
+    tracking
+        .allows(&force, &moment)
+        .then(|| (force_n + force, moment_nm + moment))
 }
 
 /// The complementarity of tensions and slack for given spool displacements, Fischer-Burmeister:
@@ -447,9 +446,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             tension_scale_n: tau_scale,
         };
         // The joint step (`joint_step.rs`) serves a control loop's tick: a warm update of the same
-        // problem, without capstan friction. Elsewhere the plain steps: the tendon inverse's fit,
-        // which solves again at each trial force, took 14 iterations at a tick of its moving-load
-        // test with them and did not converge within 40 with joint steps.
+        // problem (so not the tendon inverse's fits, whose trial forces change the load: an earlier
+        // form with joint steps in every solve left its moving-load test at 40 iterations where
+        // plain steps take 14), without capstan friction.
         let joint = same && tendons.capstans().iter().all(|c| *c == T::zero());
         let mut sens = carried.map(|c| *c.d_length_d_tension);
         let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.d_base_d_tension);
@@ -494,7 +493,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             // (`joint_step.rs`); when that trial fails, the plain full step is tried before halves.
             // (on the update's first step: the tick's; refining steps near the floor are plain)
             let mut joint_pending = joint && iterations == 1;
-            for _ in 0..13 {
+            let mut plain_trials = 0u8;
+            while plain_trials < 12 {
                 let mut trial = tau;
                 for ((t, now), d) in trial.iter_mut().zip(&tau).zip(step.iter()).take(count) {
                     *t = (*now + *d * alpha).max(T::zero());
@@ -504,12 +504,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     current.equilibrium.base_force_n,
                     current.equilibrium.base_moment_nm,
                 );
-                let mut predicted = predict(anchor, &d_base, &dt, &tracking);
+                let tracked = predict(anchor, &d_base, &dt, &tracking);
+                let mut predicted = tracked.unwrap_or(anchor);
                 let mut forward = *shooting;
                 // Whether the joint start is expected converged: its first sweep then goes without
                 // tangents (`JointStep::expected_residual` within the forward solve's tolerance).
                 let mut confirm = false;
-                let jointed = core::mem::take(&mut joint_pending) && {
+                // (Not beyond a tracking step: its start would be refused.)
+                let jointed = core::mem::take(&mut joint_pending) && tracked.is_some() && {
                     let carried = Sensitivities {
                         d_length_d_tension: &s,
                         d_base_d_tension: &d_base,
@@ -552,6 +554,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     }
                 }
                 if !jointed {
+                    plain_trials += 1;
                     alpha *= T::lit(0.5);
                 }
             }

@@ -1,17 +1,18 @@
 //! A displacement step on the tensions and the base together (MODEL.md §6.3): one sweep at the
 //! forward solve's predicted start gives the tip condition's residual `r` and Jacobian `J` there,
 //! and how the tendons' paths change along its tangents; with the carried sensitivities that is
-//! a Newton step on both, so that the forward solve at the corrected tensions starts converged
-//! and the displacement step confirms in one more sweep instead of two.
+//! a Newton step on both, so that the forward solve at the corrected tensions starts converged to
+//! first order and, on a tracking step, confirms in one more sweep instead of two.
 //!
-//! At tensions `tau` and the predicted base `x_p`, `dx = -J^-1 r` is the forward solve's own
-//! Newton step; the unstretched lengths it leads to are `N + (dN/dpath)(dpath/dx) dx` (the paths'
-//! changes recorded by the sweep, `GuideRecord::path_changes_at`). The tensions' step `dtau`
-//! solves the complementarity linearised there with the carried `dN/dtau`, and the base moves on
-//! by the carried `d_base dtau` (at a fixed base the tip condition changes by `-J d_base dtau`,
-//! so both hold to first order). The forward solve from there decides: its equilibrium is the
-//! step's, checked as every step's is. Frictionless only: with capstan friction the chords'
-//! tensions read the wrap angles, whose changes the sweep does not record.
+//! At the plain step's trial tensions `tau` and the predicted base `x_p`, `dx = -J^-1 r` is the
+//! forward solve's own Newton step; the unstretched lengths it leads to are
+//! `N + (dN/dpath)(dpath/dx) dx` (the paths' changes traced by the sweep, `PathChanges`). The
+//! tensions' correction `dtau` solves the complementarity linearised there with the carried
+//! `dN/dtau`, and the base moves on by the carried `d_base dtau` (at a fixed base the tip
+//! condition changes by `-J d_base dtau`, so both hold to first order). The forward solve from
+//! there decides: its equilibrium is the step's, checked as every step's is. Frictionless only:
+//! with capstan friction the chords' tensions read the wrap angles, whose changes the sweep does
+//! not trace.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -22,7 +23,7 @@ use crate::Scalar;
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::tendon::{GuideRecord, TendonRod};
+use crate::ode::tendon::{GuideRecord, PathChanges, TendonRod};
 use crate::sweep::{TangentSet, sweep};
 
 /// Where a joint step leads: the tensions, N, and the forward solve's start there, base force (N)
@@ -53,7 +54,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     /// would start more than a `tracking` step from `anchor` (the bound on the plain step's
     /// prediction too: a longer move could start it on another branch). The caller then takes
     /// its plain step.
+    // Out of line: its record and sweep stay out of the displacement solve's frame, under every
+    // later forward solve.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub(super) fn joint_step(
         &self,
         tendons: &Tendons<T>,
@@ -65,8 +69,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         carried: &Sensitivities<'_, T>,
         tracking: &Tracking<T>,
     ) -> (u32, Option<JointStep<T>>) {
-        let record = GuideRecord::with_path_changes();
-        let ode = TendonRod::new(self, tendons, tau, load, T::one()).recording(&record);
+        let record = GuideRecord::new();
+        let paths = PathChanges::new();
+        let ode = TendonRod::new(self, tendons, tau, load, T::one())
+            .recording(&record)
+            .tracing_paths(&paths);
         let x = ode.unknowns(&start.0, &start.1);
         let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
         // The forward solve's Newton step at these tensions.
@@ -77,7 +84,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             .filter(crate::scalar::all_finite);
         let step = dx.and_then(|dx| {
             self.joint_from(
-                tendons, fb, tau, carried, tracking, anchor, &ode, &record, &x, &dx,
+                tendons, fb, tau, carried, tracking, anchor, &ode, &record, &paths, &x, &dx,
             )
         });
         (1, step)
@@ -98,12 +105,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         (anchor_force_n, anchor_moment_nm): BaseWrench<T>,
         ode: &TendonRod<'_, T, A, NODES>,
         record: &GuideRecord<T>,
+        paths: &PathChanges<T>,
         x: &SVector<T, 6>,
         dx: &SVector<T, 6>,
     ) -> Option<JointStep<T>> {
         let count = tendons.len();
         let guides = tendons.guide_s_m.len();
-        let d_path = record.path_changes_at(x, guides)?;
+        let d_path = paths.at(record, x, guides)?;
         let poses = record.poses_at(x, guides)?;
         let rod = self.rod();
         let now = lengths(
@@ -132,13 +140,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let dtau = fb
             .jacobian(&parts, carried.d_length_d_tension)
             .lu()
-            .solve(&(-r))?;
+            .solve(&(-r))
+            .filter(crate::scalar::all_finite)?;
+        // (Checked before the clamp, which would take a NaN to zero.)
         let mut tensions_n = *tau;
         for (t, d) in tensions_n.iter_mut().zip(dtau.iter()).take(count) {
             *t = (*t + *d).max(T::zero());
-        }
-        if !tensions_n.iter().all(|t| t.is_finite()) {
-            return None;
         }
         // Where the forward solve starts: the base after its Newton step, moved on by the
         // tensions' step, within a tracking step of the last equilibrium's.
@@ -182,16 +189,22 @@ mod tests {
         let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
         let guides = tendons.guide_s_m.len();
         let rod = model.rod();
-        let record = GuideRecord::with_path_changes();
-        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0).recording(&record);
+        let record = GuideRecord::new();
+        let traced = PathChanges::new();
+        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0)
+            .recording(&record)
+            .tracing_paths(&traced);
         let x = ode.guess() * 0.7;
         assert!(sweep(&ode, &x, TangentSet::unknowns(false), None).finite);
-        let d = record.path_changes_at(&x, guides).unwrap();
+        let d = traced.at(&record, &x, guides).unwrap();
         let paths = |x: &SVector<f64, 6>| {
-            let plain = GuideRecord::with_path_changes();
-            let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0).recording(&plain);
+            let plain = GuideRecord::new();
+            let untraced = PathChanges::new();
+            let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0)
+                .recording(&plain)
+                .tracing_paths(&untraced);
             assert!(sweep(&ode, x, TangentSet::NONE, None).finite);
-            assert!(plain.path_changes_at(x, guides).is_none());
+            assert!(untraced.at(&plain, x, guides).is_none());
             let poses = plain.poses_at(x, guides).unwrap();
             lengths(
                 &tendons,
