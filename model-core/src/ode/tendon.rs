@@ -33,7 +33,7 @@ use crate::shape::ShapePoint;
 use crate::sweep::{MAX_TANGENTS, rk4};
 use crate::tendon::Routed;
 use crate::tendon::guide_force::{
-    GuideLoad, GuidePose, PoseDelta, Role, guide_load, reads_next, role,
+    GuideLoad, GuidePose, PoseDelta, Role, d_hole, guide_load, hole, reads_next, role,
 };
 use crate::tendon::{MAX_TENDONS, Tendons};
 use crate::{MAX_GUIDES, Scalar};
@@ -112,14 +112,12 @@ impl<T: Scalar> PathChanges<T> {
             if guide > r.end_guide {
                 continue;
             }
-            let chord = (cur.position_m + cur.rotation * r.offset_m)
-                - (prev.position_m + prev.rotation * r.offset_m);
+            let chord = hole(cur, &r.offset_m) - hole(prev, &r.offset_m);
             let unit = chord / chord.norm();
             let mut d = cell.get();
             for (d, t) in d.iter_mut().zip(tangents) {
-                let here = t.rod.p + cur.rotation * t.rod.th.cross(&r.offset_m);
-                let back =
-                    t.prev.position_m + prev.rotation * t.prev.rotation_rad.cross(&r.offset_m);
+                let here = d_hole(cur, &r.offset_m, &pose_delta(&t.rod));
+                let back = d_hole(prev, &r.offset_m, &t.prev);
                 *d += unit.dot(&(here - back));
             }
             cell.set(d);

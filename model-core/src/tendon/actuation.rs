@@ -103,8 +103,7 @@ impl<T: Scalar> DisplacementSolve<T> {
 /// whether it is this problem's equilibrium (same load and sliding), not to be solved again.
 #[derive(Clone, Copy, Debug)]
 struct Carried<'a, T> {
-    d_length_d_tension: &'a SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
-    d_base_d_tension: &'a SMatrix<T, 6, MAX_TENDONS>,
+    sensitivities: Sensitivities<'a, T>,
     same: bool,
 }
 
@@ -367,8 +366,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             && previous.solved.unstretched_m.len() == tendons.len()
             && previous.capstan_per_rad == tendons.capstans();
         let carried = (usable && previous.has_sensitivity).then_some(Carried {
-            d_length_d_tension: &previous.d_length_d_tension,
-            d_base_d_tension: &previous.d_base_d_tension,
+            sensitivities: Sensitivities {
+                d_length_d_tension: &previous.d_length_d_tension,
+                d_base_d_tension: &previous.d_base_d_tension,
+            },
             same,
         });
         self.displacement_solve(
@@ -450,8 +451,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // form with joint steps in every solve left its moving-load test at 40 iterations where
         // plain steps take 14), without capstan friction.
         let joint = same && tendons.capstans().iter().all(|c| *c == T::zero());
-        let mut sens = carried.map(|c| *c.d_length_d_tension);
-        let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.d_base_d_tension);
+        let mut sens = carried.map(|c| *c.sensitivities.d_length_d_tension);
+        let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.sensitivities.d_base_d_tension);
         let mut fresh = false;
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
@@ -494,16 +495,16 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             // (on the update's first step: the tick's; refining steps near the floor are plain)
             let mut joint_pending = joint && iterations == 1;
             let mut plain_trials = 0u8;
+            let anchor = (
+                current.equilibrium.base_force_n,
+                current.equilibrium.base_moment_nm,
+            );
             while plain_trials < 12 {
                 let mut trial = tau;
                 for ((t, now), d) in trial.iter_mut().zip(&tau).zip(step.iter()).take(count) {
                     *t = (*now + *d * alpha).max(T::zero());
                 }
                 let mut dt = difference(&trial, &tau);
-                let anchor = (
-                    current.equilibrium.base_force_n,
-                    current.equilibrium.base_moment_nm,
-                );
                 let tracked = predict(anchor, &d_base, &dt, &tracking);
                 let mut predicted = tracked.unwrap_or(anchor);
                 let mut forward = *shooting;
@@ -516,10 +517,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         d_length_d_tension: &s,
                         d_base_d_tension: &d_base,
                     };
-                    let (spent, stepped) = self.joint_step(
+                    let stepped = self.joint_step(
                         tendons, load, &fb, &trial, predicted, anchor, &carried, &tracking,
                     );
-                    sweeps += spent;
+                    sweeps += 1; // its one sweep, whatever the outcome
                     stepped.is_some_and(|j| {
                         (trial, predicted) = (j.tensions_n, j.base);
                         dt = difference(&trial, &tau);

@@ -263,7 +263,9 @@ mod tests {
         let eq = &solved.equilibrium;
         let at = (eq.base_force_n, eq.base_moment_nm);
         let off = (eq.base_force_n * 1.01, eq.base_moment_nm);
-        for start in [at, off] {
+        // At the answer the plain sweep confirms (the usual solve's one sweep carries tangents);
+        // off it, the plain sweep is one more than the usual solve's four.
+        for (start, usual_sweeps, more) in [(at, 1, 0), (off, 4, 1)] {
             let again = model
                 .solve_tendons_from(&set, &tau, &load, Some(start), &settings, true)
                 .unwrap();
@@ -271,13 +273,7 @@ mod tests {
                 .solve_tendons_from(&set, &tau, &load, Some(start), &settings, false)
                 .unwrap();
             assert!(again.is_success(), "{:?}", again.equilibrium.report);
-            // At the answer the plain sweep confirms (the usual solve's sweep carries tangents);
-            // off it, the plain sweep is one more.
-            let more = if start == at { 0 } else { 1 };
-            assert_eq!(
-                usual.equilibrium.report.sweeps,
-                if start == at { 1 } else { 4 }
-            );
+            assert_eq!(usual.equilibrium.report.sweeps, usual_sweeps);
             assert_eq!(
                 again.equilibrium.report.sweeps,
                 usual.equilibrium.report.sweeps + more

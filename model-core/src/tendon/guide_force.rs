@@ -73,11 +73,17 @@ pub(crate) fn reads_next<T: Scalar>(routed: &[Routed<T>], tensions_n: &[T], guid
         .any(|(r, t)| *t != T::zero() && role(r, guide) == Role::Passes)
 }
 
-fn hole<T: Scalar>(pose: &GuidePose<T>, offset: &Vector3<T>) -> Vector3<T> {
+/// The hole at `offset` (body frame, m) in a guide at `pose`: `p + R d`.
+pub(crate) fn hole<T: Scalar>(pose: &GuidePose<T>, offset: &Vector3<T>) -> Vector3<T> {
     pose.position_m + pose.rotation * offset
 }
 
-fn d_hole<T: Scalar>(pose: &GuidePose<T>, offset: &Vector3<T>, d: &PoseDelta<T>) -> Vector3<T> {
+/// The hole's move for a change `d` of the guide's pose: `dp + R (dtheta x d)`.
+pub(crate) fn d_hole<T: Scalar>(
+    pose: &GuidePose<T>,
+    offset: &Vector3<T>,
+    d: &PoseDelta<T>,
+) -> Vector3<T> {
     d.position_m + pose.rotation * d.rotation_rad.cross(offset)
 }
 

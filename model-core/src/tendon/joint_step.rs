@@ -42,6 +42,7 @@ pub(super) struct JointStep<T> {
 
 /// The carried sensitivities a joint step reads: the needed unstretched lengths' and the base's
 /// to the tensions (see [`super::DisplacementSolve`]).
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Sensitivities<'a, T> {
     pub d_length_d_tension: &'a SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
     pub d_base_d_tension: &'a SMatrix<T, 6, MAX_TENDONS>,
@@ -49,9 +50,9 @@ pub(super) struct Sensitivities<'a, T> {
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     /// The joint step from tensions `tau` (each at least zero) and the base `start` (force N,
-    /// moment N m) predicted from the last equilibrium's, `anchor`. Returns the sweeps spent (one)
-    /// and the step: `None` where the sweep or a linear solve fails, or where the forward solve
-    /// would start more than a `tracking` step from `anchor` (the bound on the plain step's
+    /// moment N m) predicted from the last equilibrium's, `anchor`, in one sweep (whatever the
+    /// outcome). The step is `None` where the sweep or a linear solve fails, or where the forward
+    /// solve would start more than a `tracking` step from `anchor` (the bound on the plain step's
     /// prediction too: a longer move could start it on another branch). The caller then takes
     /// its plain step.
     // Out of line: its record and sweep stay out of the displacement solve's frame, under every
@@ -68,7 +69,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         anchor: BaseWrench<T>,
         carried: &Sensitivities<'_, T>,
         tracking: &Tracking<T>,
-    ) -> (u32, Option<JointStep<T>>) {
+    ) -> Option<JointStep<T>> {
         let record = GuideRecord::new();
         let paths = PathChanges::new();
         let ode = TendonRod::new(self, tendons, tau, load, T::one())
@@ -82,12 +83,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             .then(|| sw.jacobian().lu().solve(&(-sw.residual)))
             .flatten()
             .filter(crate::scalar::all_finite);
-        let step = dx.and_then(|dx| {
+        dx.and_then(|dx| {
             self.joint_from(
                 tendons, fb, tau, carried, tracking, anchor, &ode, &record, &paths, &x, &dx,
             )
-        });
-        (1, step)
+        })
     }
 
     /// The joint step after its sweep at `x` (kept in `record`), from the base's Newton step `dx`.
@@ -130,11 +130,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             .zip(tendons.tendons())
             .zip(tau)
         {
-            let moved = d
+            let path_change_m = d
                 .iter()
                 .zip(dx.iter())
                 .fold(T::zero(), |a, (d, x)| a + *d * *x);
-            *n += t.unstretched_m(moved, *tension);
+            *n += t.unstretched_m(path_change_m, *tension);
         }
         let (r, parts, _) = fb.residual(needed.get(..count)?, tau);
         let dtau = fb
@@ -150,17 +150,18 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // Where the forward solve starts: the base after its Newton step, moved on by the
         // tensions' step, within a tracking step of the last equilibrium's.
         let moved = carried.d_base_d_tension * difference(&tensions_n, tau);
+        let (moved_force_n, moved_moment_nm) = (
+            moved.fixed_rows::<3>(0).into_owned(),
+            moved.fixed_rows::<3>(3).into_owned(),
+        );
         let (_, force_n, moment_nm) = ode.base(&(x + dx));
-        let force_n = force_n + moved.fixed_rows::<3>(0);
-        let moment_nm = moment_nm + moved.fixed_rows::<3>(3);
+        let force_n = force_n + moved_force_n;
+        let moment_nm = moment_nm + moved_moment_nm;
         if !tracking.allows(&(force_n - anchor_force_n), &(moment_nm - anchor_moment_nm)) {
             return None;
         }
         let newton_rad = dx.norm() * self.length_m();
-        let (bending, axial) = tracking.size(
-            &moved.fixed_rows::<3>(0).into_owned(),
-            &moved.fixed_rows::<3>(3).into_owned(),
-        );
+        let (bending, axial) = tracking.size(&moved_force_n, &moved_moment_nm);
         Some(JointStep {
             tensions_n,
             base: (force_n, moment_nm),

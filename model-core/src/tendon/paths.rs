@@ -9,7 +9,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::guide_force::{GuidePose, wrap_and_change};
+use super::guide_force::{GuidePose, hole, wrap_and_change};
 use super::{MAX_TENDONS, Tendons};
 use crate::Scalar;
 
@@ -41,7 +41,7 @@ pub(crate) fn lengths<T: Scalar>(
         let mut tau = spool;
         let (mut path, mut unstretched) = (T::zero(), t.unstretched_m(t.feed_length_m, spool));
         for guide in guides.get(..=r.end_guide)? {
-            let hole = guide.position_m + guide.rotation * r.offset_m;
+            let hole = hole(guide, &r.offset_m);
             let chord = hole - prev;
             let l = chord.norm();
             let u = chord / l;
