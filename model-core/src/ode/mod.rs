@@ -132,6 +132,14 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     #[inline]
     fn after_step(&self, _y: &mut Self::State, _tangents: &mut [Self::Tangent]) {}
 
+    /// Whether the tangents at `y` are already those of the next node (a node's jump integrated
+    /// them there): the sweep then steps the state alone until that node. Only for equations
+    /// whose sweeps read no tangent before it (no stability test, no cables).
+    #[inline]
+    fn tangents_ahead(&self, _y: &Self::State) -> bool {
+        false
+    }
+
     /// The jump at an interior node (not the base, not the tip) between the intervals with
     /// coefficients `proximal` and `distal`.
     fn node(

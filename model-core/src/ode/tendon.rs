@@ -14,8 +14,11 @@
 //! with a local solve per guide instead of multiple shooting's `6 (guides + 1)` unknowns.
 //!
 //! The look-aheads are most of a sweep's work, so the sweep's tangents ride along only on the one
-//! expected to end the local solve, and a correction whose successor Newton's quadratic
-//! convergence puts at rounding ends it without another look-ahead (MODEL.md §6.5).
+//! expected to end the local solve, a correction whose successor Newton's quadratic convergence
+//! puts at rounding ends it without another look-ahead, and a sweep without tangents takes chord
+//! steps after its first Newton step (the same factored Jacobian; a look-ahead of the state alone)
+//! while they contract, and the riding tangents, integrated to the next guide by the last
+//! look-ahead, are not integrated again by the sweep (MODEL.md §6.5).
 //!
 //! The state carries the previous guide's pose (the base plate's at the start) for the chords.
 
@@ -181,6 +184,9 @@ pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
     tendons: &'a Tendons<T>,
     record: Option<&'a GuideRecord<T>>,
     paths: Option<&'a PathChanges<T>>,
+    /// Whether the sweep takes its tangents from a jump's look-ahead one predicted correction
+    /// from the answer too, not only at rounding ([`TendonRod::jumping_ahead`]).
+    jump_ahead: bool,
     /// Full tensions, N.
     tensions_n: [T; MAX_TENDONS],
     /// Tensions at the load scale, N.
@@ -211,6 +217,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             tendons,
             record: None,
             paths: None,
+            jump_ahead: false,
             tensions_n: *tensions_n,
             scaled_n: tensions_n.map(|t| t * alpha),
         }
@@ -229,6 +236,18 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     pub(crate) fn tracing_paths(self, paths: &'a PathChanges<T>) -> Self {
         Self {
             paths: Some(paths),
+            ..self
+        }
+    }
+
+    /// These equations, their sweeps taking the tangents beyond a guide from its jump's last
+    /// look-ahead also where that ran one predicted correction from the answer: a Jacobian off by
+    /// about that correction, relative (f32: up to about `sqrt(eps)`), for a sweep less. For a
+    /// step whose answer a plain sweep checks (the joint step's); not for solves whose answers are
+    /// differenced (the tendon inverse's sensitivities see the difference).
+    pub(crate) fn jumping_ahead(self) -> Self {
+        Self {
+            jump_ahead: true,
             ..self
         }
     }
@@ -312,6 +331,32 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         }
     }
 
+    /// The jump's linearisation at `guide` with `poses` (the next one a look-ahead's, whose
+    /// first six directions `dirs` are `(n, m)`'s), into `lin` (in place: the matrices stay in the
+    /// jump's frame).
+    fn linearise(
+        &self,
+        guide: usize,
+        back_n: &[T],
+        poses: [&GuidePose<T>; 3],
+        dirs: &[force_state::Tangent<T>],
+        lin: &mut Linearised<T>,
+    ) {
+        let zero = PoseDelta::zero();
+        let no_change = [T::zero(); MAX_TENDONS];
+        for (j, mut col) in lin.w_next.column_iter_mut().enumerate() {
+            let d = unstacked(&super::unit::<T, 6>(j));
+            let dw = self
+                .load(guide, back_n, poses, Some(([&zero, &zero, &d], &no_change)))
+                .d_wrench;
+            col.copy_from(&self.stack(&dw.force_n, &dw.moment_nm));
+        }
+        for (mut col, t) in lin.psi.column_iter_mut().zip(dirs) {
+            col.copy_from(&stacked(&pose_delta(t)));
+        }
+        lin.lu = (SMatrix::<T, 6, 6>::identity() + lin.w_next * lin.psi).lu();
+    }
+
     fn scale(&self) -> T {
         // The load scale is the ratio of scaled to full tensions of any tendon, but tensions may be
         // zero: the wrapped equations keep it.
@@ -374,6 +419,12 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut last_step: Option<T> = None;
         let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
+        // The last Newton pass's `W_next`, `Psi` and `I + W_next Psi` factored, and whether the
+        // next pass may reuse them (a chord step).
+        let mut lin = Linearised::blank();
+        let mut linearised = false;
+        let mut chord_next = false;
+        let mut chord_spent = false;
         // One pass beyond the limit, for the tangents of a solve that converged on its last.
         let mut passes = MAX_JUMP_ITERATIONS;
         let mut pass = 0;
@@ -390,7 +441,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     e * T::lit(4.0) <= done_at || (!friction && T::lit(4.0) * c * e * e <= done_at)
                 });
             let carried = if ride { count } else { 0 };
-            for (j, t) in all.iter_mut().enumerate().take(6 + carried) {
+            // A sweep without tangents reuses the last Newton pass's Jacobian while its steps
+            // contract (a chord step): its look-ahead integrates the state alone, a seventh of
+            // one with the six directions.
+            // (Not in the second half of the passes: a slow chord must leave Newton the rest.)
+            let chord = count == 0 && chord_next && linearised && 2 * pass <= passes;
+            let directions = if chord { 0 } else { 6 + carried };
+            for (j, t) in all.iter_mut().enumerate().take(directions) {
                 *t = force_state::Tangent::zero();
                 if j < 3 {
                     t.n = super::unit::<T, 3>(j) / length;
@@ -400,7 +457,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     *t = t0.rod;
                 }
             }
-            let Some(dirs) = all.get_mut(..6 + carried) else {
+            let Some(dirs) = all.get_mut(..directions) else {
                 return false;
             };
             let start = force_state::State { n, m, ..y.rod };
@@ -412,23 +469,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             let here = self.load(guide, &back, poses, None);
             let w = here.wrench;
             let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
-            // `W_next`: the wrench per move of the next pose (stacked both); `Psi`: the next pose's
-            // moves along the look-ahead's six directions.
-            let mut w_next = SMatrix::<T, 6, 6>::zeros();
-            for (j, mut col) in w_next.column_iter_mut().enumerate() {
-                let d = unstacked(&super::unit::<T, 6>(j));
-                let no_change = [T::zero(); MAX_TENDONS];
-                let dw = self
-                    .load(guide, &back, poses, Some(([&zero, &zero, &d], &no_change)))
-                    .d_wrench;
-                col.copy_from(&self.stack(&dw.force_n, &dw.moment_nm));
+            if !chord {
+                self.linearise(guide, &back, poses, &all, &mut lin);
+                linearised = true;
             }
-            let mut psi = SMatrix::<T, 6, 6>::zeros();
-            for (mut col, t) in psi.column_iter_mut().zip(all.iter()) {
-                col.copy_from(&stacked(&pose_delta(t)));
-            }
-            let lu = (SMatrix::<T, 6, 6>::identity() + w_next * psi).lu();
-            let Some(step) = lu.solve(&(-g)) else {
+            let Some(step) = lin.lu.solve(&(-g)) else {
                 return false;
             };
             if !crate::scalar::all_finite(&step) {
@@ -438,25 +483,46 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             n += dn / length;
             m += dm;
             let size = step.norm();
-            let stalled =
-                last_step.is_some_and(|last| size >= last * T::lit(0.5)) && contraction.is_some();
             let prior = last_step;
-            contraction = last_step
-                .filter(|last| *last > T::zero())
-                .map(|last| size / (last * last));
             last_step = Some(size);
-            // Done when the correction is at rounding, or (without friction, and converging clearly:
-            // a quarter of the last correction at most) when the one it leaves, `C |step|^2`, is.
-            let converging = prior.is_some_and(|last| size <= last * T::lit(0.25));
-            let done = size <= done_at
-                || (!friction
-                    && converging
-                    && contraction.is_some_and(|c| T::lit(4.0) * c * size * size <= done_at));
-            if !(done || stalled) {
-                continue;
-            }
-            if !done && size > T::lit(1024.0) * eps * scale {
-                return false;
+            // A chord step leaves about `rho |step|`, `rho` its measured contraction; one that
+            // contracts by less than sixteen hands over to Newton passes.
+            if chord {
+                let rho = prior.filter(|p| *p > T::zero()).map(|p| size / p);
+                // A chord step says nothing of Newton's `C`; one that does not contract ends the
+                // chord steps of this jump.
+                contraction = None;
+                chord_next = rho.is_some_and(|r| r <= T::lit(0.0625));
+                chord_spent = !chord_next;
+                let done = size <= done_at
+                    || (!friction
+                        && rho.is_some_and(|r| {
+                            r <= T::lit(0.25) && T::lit(4.0) * r * size <= done_at
+                        }));
+                if !done {
+                    continue;
+                }
+            } else {
+                chord_next = !chord_spent;
+                let stalled =
+                    prior.is_some_and(|last| size >= last * T::lit(0.5)) && contraction.is_some();
+                contraction = prior
+                    .filter(|last| *last > T::zero())
+                    .map(|last| size / (last * last));
+                // Done when the correction is at rounding, or (without friction, and converging
+                // clearly: a quarter of the last correction at most) when the one it leaves,
+                // `C |step|^2`, is.
+                let converging = prior.is_some_and(|last| size <= last * T::lit(0.25));
+                let done = size <= done_at
+                    || (!friction
+                        && converging
+                        && contraction.is_some_and(|c| T::lit(4.0) * c * size * size <= done_at));
+                if !(done || stalled) {
+                    continue;
+                }
+                if !done && size > T::lit(1024.0) * eps * scale {
+                    return false;
+                }
             }
             if count > carried {
                 // Converged on a look-ahead without the tangents: one more, at the answer, with them.
@@ -464,6 +530,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 passes = passes.max(pass + 1);
                 continue;
             }
+            // The tangents at the next guide come from the look-ahead where no cable reads them
+            // at the nodes between (`observe` in the sweep), and where it ran at the answer: at
+            // rounding, or (`jumping_ahead`) one correction `|step|` from it, which it predicted at
+            // rounding (the tangents then lie on a path `|step|` off the sweep's; the riding
+            // tangents' jump was taken there already).
+            let ahead_of_sweep =
+                self.model.grid().cable_offsets.is_empty() && (size <= done_at || self.jump_ahead);
             // The tangents: `dx = dx0 + delta`, `(I + W_next Psi) delta = -W_next dP0`; the next
             // pose then moves by `dP0 + Psi delta`, which sets the tensions beyond. `dx0` is the
             // tangent before the jump less the known poses' and tensions' share, here; the look-ahead
@@ -483,15 +556,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     )
                     .d_wrench;
                 let fix = self.stack(&(-known.force_n), &(-known.moment_nm));
-                let d0 = stacked(&pose_delta(ahead)) + psi * fix;
-                let Some(delta) = lu.solve(&(-(w_next * d0))) else {
+                let d0 = stacked(&pose_delta(ahead)) + lin.psi * fix;
+                let Some(delta) = lin.lu.solve(&(-(lin.w_next * d0))) else {
                     return false;
                 };
                 let (dn, dm) = split(&(fix + delta));
                 t.rod.n += dn / length;
                 t.rod.m += dm;
                 if friction {
-                    let d_next = unstacked(&(d0 + psi * delta));
+                    let d_next = unstacked(&(d0 + lin.psi * delta));
                     let d_cur = pose_delta(&t.rod);
                     let full = self.load(
                         guide,
@@ -506,13 +579,45 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                         &mut t.d_chord_n,
                     );
                 }
+                if ahead_of_sweep {
+                    // The look-ahead integrated this tangent to the next guide; with the jump's
+                    // change of `(n, m)` along the six directions (the look-ahead is linear in its
+                    // tangents) it is the tangent there, and the sweep need not step it again.
+                    t.prev = pose_delta(&t.rod);
+                    let mut end = *ahead;
+                    for (dir, c) in all.iter().zip((fix + delta).iter()) {
+                        end = end.axpy(dir, *c);
+                    }
+                    t.rod = end;
+                }
             }
+            y.tangents_ahead = ahead_of_sweep && count > 0;
             carry(&self.tendons.routed, guide, &here.ahead_n, &mut y.chord_n);
             y.rod.n = n;
             y.rod.m = m;
             return true;
         }
         false
+    }
+}
+
+/// A jump's Newton linearisation at a look-ahead: `W_next`, the wrench per move of the next pose
+/// (stacked both), `Psi`, the next pose's moves along the look-ahead's six directions, and
+/// `I + W_next Psi` factored.
+struct Linearised<T: Scalar> {
+    w_next: SMatrix<T, 6, 6>,
+    psi: SMatrix<T, 6, 6>,
+    lu: nalgebra::linalg::LU<T, nalgebra::Const<6>, nalgebra::Const<6>>,
+}
+
+impl<T: Scalar> Linearised<T> {
+    /// Before the first Newton pass (never used: a chord step needs one).
+    fn blank() -> Self {
+        Self {
+            w_next: SMatrix::zeros(),
+            psi: SMatrix::zeros(),
+            lu: SMatrix::<T, 6, 6>::identity().lu(),
+        }
     }
 }
 
@@ -567,6 +672,9 @@ pub(crate) struct State<T: Scalar, A> {
     prev: GuidePose<T>,
     /// Each tendon's tension in the chord arriving at the next guide, N (at the load scale).
     chord_n: [T; MAX_TENDONS],
+    /// Whether the tangents are already the next guide's (the last jump's look-ahead integrated
+    /// them there, `RodOde::tangents_ahead`).
+    tangents_ahead: bool,
 }
 
 /// A tangent of the rod's state and of the previous guide's pose.
@@ -672,6 +780,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
                 rotation: rod.base_orientation,
             },
             chord_n: self.scaled_n,
+            tangents_ahead: false,
         }
     }
 
@@ -768,6 +877,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         if node.guide == NO_GUIDE {
             return;
         }
+        // Tangents integrated here by the last jump's look-ahead are this guide's now.
+        y.tangents_ahead = false;
         let guide = usize::from(node.guide);
         let cur = Self::guide_pose(&y.rod);
         if let Some(record) = self.record {
@@ -806,9 +917,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             y.rod.m -= w.moment_nm;
         }
         y.prev = cur;
-        for t in tangents.iter_mut() {
-            t.prev = pose_delta(&t.rod);
+        if !y.tangents_ahead {
+            for t in tangents.iter_mut() {
+                t.prev = pose_delta(&t.rod);
+            }
         }
+    }
+
+    fn tangents_ahead(&self, y: &State<T, A>) -> bool {
+        y.tangents_ahead
     }
 
     /// The wrapped tip condition, less the tendons terminating at a tip guide.
@@ -917,6 +1034,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::plan::MAX_NODES;
     use crate::sweep::{TangentSet, sweep};
     use crate::tendon::Tendon;
     use crate::{CrossSection, Guide, GuideMass, Material, Rod, Section, Stiffness};
@@ -978,9 +1096,20 @@ pub(crate) mod tests {
         tau[0] = 2.0;
         tau[1] = 1.5;
         let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
-        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0);
+        let plain = TendonRod::new(&model, &tendons, &tau, &load, 1.0);
+        // Also with the tangents taken from the look-aheads one predicted correction from the
+        // jumps' answers (`jumping_ahead`), not only at rounding.
+        for ode in [plain, plain.jumping_ahead()] {
+            jacobian_of_matches(&ode, mu);
+        }
+    }
+
+    fn jacobian_of_matches(
+        ode: &TendonRod<'_, f64, crate::kinematics::Quaternion<f64>, MAX_NODES>,
+        mu: f64,
+    ) {
         let x = ode.guess() * 0.7;
-        let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
+        let sw = sweep(ode, &x, TangentSet::unknowns(false), None);
         assert!(sw.finite);
         let j = sw.jacobian();
         let h = 1e-6;
@@ -988,8 +1117,8 @@ pub(crate) mod tests {
         for c in 0..6 {
             let mut dx = SVector::<f64, 6>::zeros();
             dx[c] = h;
-            let plus = sweep(&ode, &(x + dx), TangentSet::NONE, None);
-            let minus = sweep(&ode, &(x - dx), TangentSet::NONE, None);
+            let plus = sweep(ode, &(x + dx), TangentSet::NONE, None);
+            let minus = sweep(ode, &(x - dx), TangentSet::NONE, None);
             let fd = (plus.residual - minus.residual) / (2.0 * h);
             let err = (fd - j.column(c)).norm() / j.norm();
             worst = worst.max(err);

@@ -305,6 +305,8 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
         if let (Some(node), Some(prox)) = (node, &proximal) {
             ode.node(node, prox, &field, &mut y, tan);
         }
+        // Tangents already at the next node (`RodOde::tangents_ahead`) are not stepped.
+        let stepped = !tan.is_empty() && !ode.tangents_ahead(&y);
         observe(
             ode,
             node,
@@ -333,7 +335,7 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
             let h = s_next - s;
             // The bending load at the step's start: from the first stage's record when the step
             // keeps one (it has the force in the section's frame at hand).
-            let load = if tan.is_empty() {
+            let load = if !stepped {
                 let load = ode.bending_load(&field, s, &y);
                 y = rk4::step(ode, &field, s, h, &y, None);
                 load

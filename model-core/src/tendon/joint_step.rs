@@ -74,7 +74,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let paths = PathChanges::new();
         let ode = TendonRod::new(self, tendons, tau, load, T::one())
             .recording(&record)
-            .tracing_paths(&paths);
+            .tracing_paths(&paths)
+            .jumping_ahead();
         let x = ode.unknowns(&start.0, &start.1);
         let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
         // The forward solve's Newton step at these tensions.
