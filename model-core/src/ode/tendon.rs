@@ -36,7 +36,8 @@ use crate::shape::ShapePoint;
 use crate::sweep::{MAX_TANGENTS, rk4};
 use crate::tendon::Routed;
 use crate::tendon::guide_force::{
-    GuideLoad, GuidePose, PoseDelta, Role, d_hole, guide_load, hole, reads_next, role,
+    GuideLoad, GuidePose, PoseDelta, Role, d_hole, d_wrench_d_next, guide_load, hole, reads_next,
+    role,
 };
 use crate::tendon::{MAX_TENDONS, Tendons};
 use crate::{MAX_GUIDES, Scalar};
@@ -344,17 +345,43 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     ) {
         let zero = PoseDelta::zero();
         let no_change = [T::zero(); MAX_TENDONS];
+        let [_, cur, next] = poses;
+        let direct = d_wrench_d_next(&self.tendons.routed, back_n, guide, cur, next);
         for (j, mut col) in lin.w_next.column_iter_mut().enumerate() {
-            let d = unstacked(&super::unit::<T, 6>(j));
-            let dw = self
-                .load(guide, back_n, poses, Some(([&zero, &zero, &d], &no_change)))
-                .d_wrench;
+            let dw = match direct.as_ref().and_then(|d| d.get(j)) {
+                Some(dw) => *dw,
+                None => {
+                    let d = unstacked(&super::unit::<T, 6>(j));
+                    self.load(guide, back_n, poses, Some(([&zero, &zero, &d], &no_change)))
+                        .d_wrench
+                }
+            };
             col.copy_from(&self.stack(&dw.force_n, &dw.moment_nm));
         }
         for (mut col, t) in lin.psi.column_iter_mut().zip(dirs) {
             col.copy_from(&stacked(&pose_delta(t)));
         }
         lin.lu = (SMatrix::<T, 6, 6>::identity() + lin.w_next * lin.psi).lu();
+    }
+
+    /// The look-ahead's end of tangent `t0` from its first nine directions' (`(n, m)`'s six, then
+    /// the start's three turns): `t0`'s translation, turn and change of `(n, m)` combined.
+    fn assembled(
+        &self,
+        t0: &force_state::Tangent<T>,
+        dirs: &[force_state::Tangent<T>],
+    ) -> force_state::Tangent<T> {
+        let mut end = force_state::Tangent {
+            p: t0.p,
+            ..force_state::Tangent::zero()
+        };
+        // The `(n, m)` directions are `(e_i / L, e_i)`: `t0`'s weights are its stacked wrench.
+        let wrench = self.stack(&t0.n, &t0.m);
+        let weights = wrench.iter().copied().chain(t0.th.iter().copied());
+        for (d, w) in dirs.iter().zip(weights) {
+            end = end.axpy(d, w);
+        }
+        end
     }
 
     fn scale(&self) -> T {
@@ -446,13 +473,21 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             // one with the six directions.
             // (Not in the second half of the passes: a slow chord must leave Newton the rest.)
             let chord = count == 0 && chord_next && linearised && 2 * pass <= passes;
-            let directions = if chord { 0 } else { 6 + carried };
+            // More than three riding tangents are assembled from three turns of the start
+            // instead (a tangent is a translation, a turn and a change of `(n, m)`, and the
+            // look-ahead is linear; a translation moves its end rigidly, as no rate reads the
+            // position).
+            let assemble = carried > 3;
+            let riding = if assemble { 3 } else { carried };
+            let directions = if chord { 0 } else { 6 + riding };
             for (j, t) in all.iter_mut().enumerate().take(directions) {
                 *t = force_state::Tangent::zero();
                 if j < 3 {
                     t.n = super::unit::<T, 3>(j) / length;
                 } else if j < 6 {
                     t.m = super::unit::<T, 3>(j - 3);
+                } else if assemble {
+                    t.th = super::unit::<T, 3>(j - 6);
                 } else if let Some(t0) = tangents.get(j - 6) {
                     *t = t0.rod;
                 }
@@ -543,9 +578,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             // integrated the tangent before the jump, so its end is corrected along the six
             // directions (the look-ahead is linear in its tangents).
             for (j, t) in tangents.iter_mut().enumerate().take(count) {
-                let Some(ahead) = all.get(6 + j) else {
-                    return false;
+                let ahead = if count > 3 {
+                    self.assembled(&t.rod, &all)
+                } else {
+                    let Some(ahead) = all.get(6 + j) else {
+                        return false;
+                    };
+                    *ahead
                 };
+                let ahead = &ahead;
                 let d = pose_delta(&t.rod);
                 let known = self
                     .load(

@@ -609,8 +609,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut states = Vec::new();
         for (t, p) in tau.iter().zip(&phi).take(count) {
             // The side of the complementarity the answer is on: more slack than tension (both
-            // scaled as in the residual) is slack, whatever rounding left of the tension.
-            let slack = *t / tau_scale < *p / radius;
+            // scaled as in the residual) is slack, whatever rounding left of the tension; so is no
+            // tension at all, whatever rounding left of the slack (at the kink, where both are
+            // zero, the path a rounding error longer than the tendon).
+            let slack = *t == T::zero() || *t / tau_scale < *p / radius;
             // Cannot overflow: at most MAX_TENDONS.
             let _ = slack_m.push(if slack { p.max(T::zero()) } else { T::zero() });
             let _ = states.push(if slack {

@@ -201,3 +201,112 @@ pub(crate) fn guide_load<T: Scalar>(
     }
     out
 }
+
+/// Frictionless, the wrench's change per move of the next guide's pose, column `k` for the move
+/// along `dp_k` (`k < 3`) or the turn `dtheta_(k-3)` (body frame): [`guide_load`]'s `d_wrench`
+/// for those six moves, in one pass. Only the passing tendons' chords ahead move,
+/// `dF = tau (dP - u (u . dP)) / |P_next - P|` with `dP` the next hole's move; the moment is the
+/// arm's, `(R d) x dF`. `None` where a tendon passing here has capstan friction (its tension
+/// beyond reads the wrap): then [`guide_load`] per move.
+pub(crate) fn d_wrench_d_next<T: Scalar>(
+    routed: &[Routed<T>],
+    back_n: &[T],
+    guide: usize,
+    cur: &GuidePose<T>,
+    next: &GuidePose<T>,
+) -> Option<[Wrench<T>; 6]> {
+    let mut out = [Wrench::zero(); 6];
+    for (r, tau) in routed.iter().zip(back_n) {
+        if *tau == T::zero() || role(r, guide) != Role::Passes {
+            continue;
+        }
+        if r.capstan_per_rad != T::zero() {
+            return None;
+        }
+        let ahead = hole(next, &r.offset_m) - hole(cur, &r.offset_m);
+        let len = ahead.norm();
+        let u = ahead / len;
+        let k = *tau / len;
+        let arm = cur.rotation * r.offset_m;
+        for (j, w) in out.iter_mut().enumerate() {
+            let mut axis = Vector3::zeros();
+            if let Some(a) = axis.get_mut(j % 3) {
+                *a = T::one();
+            }
+            let moved = if j < 3 {
+                axis
+            } else {
+                next.rotation * axis.cross(&r.offset_m)
+            };
+            let df = (moved - u * u.dot(&moved)) * k;
+            w.force_n += df;
+            w.moment_nm += arm.cross(&df);
+        }
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Rotation3;
+
+    fn pose(p: [f64; 3], axis_angle: [f64; 3]) -> GuidePose<f64> {
+        GuidePose {
+            position_m: Vector3::from(p),
+            rotation: Rotation3::new(Vector3::from(axis_angle)).into_inner(),
+        }
+    }
+
+    /// The direct change of the wrench per move of the next pose is `guide_load`'s along each of
+    /// the six moves, for two tendons passing and one ending here; with friction there is none.
+    #[test]
+    fn tendon_next_pose_change_is_the_loads_along_six_moves() {
+        let mut routed = [
+            Routed {
+                offset_m: Vector3::new(0.01, 0.0, 0.0),
+                end_guide: 3,
+                capstan_per_rad: 0.0,
+            },
+            Routed {
+                offset_m: Vector3::new(-0.004, 0.008, 0.0),
+                end_guide: 2,
+                capstan_per_rad: 0.0,
+            },
+            Routed {
+                offset_m: Vector3::new(0.0, -0.009, 0.0),
+                end_guide: 1,
+                capstan_per_rad: 0.0,
+            },
+        ];
+        let back = [2.0, 1.3, 0.7];
+        let prev = pose([0.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+        let cur = pose([0.002, -0.001, 0.05], [0.05, -0.03, 0.1]);
+        let next = pose([0.006, -0.003, 0.099], [0.11, -0.05, 0.17]);
+        let direct = d_wrench_d_next(&routed, &back, 1, &cur, &next).unwrap();
+        let zero = PoseDelta::zero();
+        let none = [0.0; MAX_TENDONS];
+        for (k, w) in direct.iter().enumerate() {
+            let mut d = PoseDelta::zero();
+            if k < 3 {
+                d.position_m[k] = 1.0;
+            } else {
+                d.rotation_rad[k - 3] = 1.0;
+            }
+            let want = guide_load(
+                &routed,
+                &back,
+                1,
+                [&prev, &cur, &next],
+                Some(([&zero, &zero, &d], &none)),
+            )
+            .d_wrench;
+            let off = (w.force_n - want.force_n).norm() + (w.moment_nm - want.moment_nm).norm();
+            let size = want.force_n.norm() + want.moment_nm.norm();
+            assert!(size > 1e-3, "move {k}: a change to compare");
+            assert!(off < 1e-12 * size, "move {k}: {off:e}");
+        }
+        routed[0].capstan_per_rad = -0.2;
+        assert!(d_wrench_d_next(&routed, &back, 1, &cur, &next).is_none());
+    }
+}
