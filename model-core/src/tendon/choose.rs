@@ -46,12 +46,13 @@ pub struct TendonVariant {
 /// [`crate::reduction::step_cost`] (a 3D Cosserat step of the dead-load equations = 100), from
 /// instruction counts (callgrind, x86-64, f64, the test profile) on the two-section, six-tendon
 /// robot (14 guides, gravity, a tip force, 20 steps per section: 48 steps; at its solution;
-/// `cost_probe` below): dead load 1828, discrete guides 38845, continuous routing 20499
+/// `cost_probe` below): dead load 1828, discrete guides 22091 (38845 before a plain sweep's jumps
+/// took chord steps and `W_next` its direct form, MODEL.md §6.5), continuous routing 20499
 /// instructions per step. A discrete-guide step includes its share of the look-ahead each implicit
-/// jump integrates (a few Newton passes over the segment with six directions); a continuous step
-/// its four strain solves (about 3.7k instructions each: chord steps, an interval's chord matrix).
-/// Whole cold solves there: discrete guides 75.3 M instructions (21 sweeps), continuous routing
-/// 23.8 M (7 sweeps).
+/// jump integrates (a Newton pass over the segment with six directions, then chord passes of the
+/// state alone); a continuous step its four strain solves (about 3.7k instructions each: chord
+/// steps, an interval's chord matrix). Whole cold solves there: discrete guides 58.4 M
+/// instructions (21 sweeps; 75.3 M before), continuous routing 23.8 M (7 sweeps).
 pub fn tendon_step_cost(model: TendonModel) -> u32 {
     match model {
         TendonModel::DiscreteGuides => DISCRETE_STEP_COST,
@@ -60,7 +61,7 @@ pub fn tendon_step_cost(model: TendonModel) -> u32 {
     }
 }
 
-const DISCRETE_STEP_COST: u32 = 2125;
+const DISCRETE_STEP_COST: u32 = 1208;
 const CONTINUOUS_STEP_COST: u32 = 1121;
 
 /// The cost of a piecewise-constant-curvature shape, in the same units: the whole closed form
