@@ -444,6 +444,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             .iter()
             .any(|r| r.capstan_per_rad != T::zero() && role(r, guide) == Role::Passes);
         let mut last_step: Option<T> = None;
+        // The last step's size if it was a Newton step (not a chord step).
+        let mut last_newton: Option<T> = None;
         let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
         // The last Newton pass's `W_next`, `Psi` and `I + W_next Psi` factored, and whether the
@@ -515,20 +517,26 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 return false;
             }
             let (dn, dm) = split(&step);
-            n += dn / length;
-            m += dm;
             let size = step.norm();
-            let prior = last_step;
-            last_step = Some(size);
-            // A chord step leaves about `rho |step|`, `rho` its measured contraction; one that
-            // contracts by less than sixteen hands over to Newton passes.
             if chord {
-                let rho = prior.filter(|p| *p > T::zero()).map(|p| size / p);
-                // A chord step says nothing of Newton's `C`; one that does not contract ends the
-                // chord steps of this jump.
+                // A chord step leaves about `rho |step|`, `rho` its contraction against the last
+                // step taken. One that does not halve is not taken (far from the last Newton
+                // point its Jacobian may be nothing like the jump's): Newton goes on from here.
+                let rho = last_step.filter(|p| *p > T::zero()).map(|p| size / p);
+                if !rho.is_some_and(|r| r <= T::lit(0.5)) {
+                    chord_next = false;
+                    chord_spent = true;
+                    continue;
+                }
+                n += dn / length;
+                m += dm;
+                last_step = Some(size);
+                // A chord step says nothing of Newton's `C`; one that contracts by less than
+                // sixteen ends the chord steps of this jump.
+                last_newton = None;
                 contraction = None;
                 chord_next = rho.is_some_and(|r| r <= T::lit(0.0625));
-                chord_spent = !chord_next;
+                chord_spent = chord_spent || !chord_next;
                 let done = size <= done_at
                     || (!friction
                         && rho.is_some_and(|r| {
@@ -538,7 +546,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     continue;
                 }
             } else {
+                n += dn / length;
+                m += dm;
+                last_step = Some(size);
                 chord_next = !chord_spent;
+                // Newton's `C` and its stall from consecutive Newton steps only.
+                let prior = last_newton;
+                last_newton = Some(size);
                 let stalled =
                     prior.is_some_and(|last| size >= last * T::lit(0.5)) && contraction.is_some();
                 contraction = prior
@@ -1079,6 +1093,44 @@ pub(crate) mod tests {
     use crate::sweep::{TangentSet, sweep};
     use crate::tendon::Tendon;
     use crate::{CrossSection, Guide, GuideMass, Material, Rod, Section, Stiffness};
+
+    /// A plain sweep at a converged equilibrium is finite and gives its tip and its residual,
+    /// whatever its jumps' chord steps do: at a high tension, where a chord step from the
+    /// straight-ahead start may not contract (it is not taken then), the shape sweep of a
+    /// converged solve agrees with the solve, and so does a sweep with tangents.
+    #[test]
+    fn tendon_plain_sweeps_at_a_converged_equilibrium_agree_with_it() {
+        let (model, tendons) = scene();
+        let tendons = Tendons::new(&model, &tendons).unwrap();
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        for tau in [[20.0, 0.0], [8.0, 4.0], [2.0, 1.5]] {
+            let eq = model
+                .solve_tendons(&tendons, &tau, &load, None, &Default::default())
+                .unwrap();
+            assert!(eq.is_success(), "{tau:?}: {:?}", eq.equilibrium.report);
+            let mut out = [ShapePoint::default(); 4];
+            let written = model
+                .shape_tendons(&tendons, &eq, &[0.0, 0.1, 0.2, 0.3], &mut out)
+                .unwrap();
+            assert_eq!(written, 4);
+            let tip = eq.equilibrium.tip_position_m;
+            assert!((out[3].position_m - tip).norm() < 1e-12, "{tau:?}");
+            let mut full = [0.0; MAX_TENDONS];
+            full[..2].copy_from_slice(&tau);
+            let ode = TendonRod::new(&model, &tendons, &full, &load, 1.0);
+            let eqb = &eq.equilibrium;
+            let x = ode.unknowns(&eqb.base_force_n, &eqb.base_moment_nm);
+            let plain = sweep(&ode, &x, TangentSet::NONE, None);
+            let with = sweep(&ode, &x, TangentSet::unknowns(false), None);
+            assert!(plain.finite && with.finite, "{tau:?}");
+            assert!(
+                plain.residual.norm() < 1e-9,
+                "{tau:?}: {:e}",
+                plain.residual.norm()
+            );
+            assert!((plain.residual - with.residual).norm() < 1e-12, "{tau:?}");
+        }
+    }
 
     /// A rod under gravity with four guides and two tendons, one ending mid-way.
     pub(crate) fn scene() -> (Model<f64>, [Tendon<f64>; 2]) {
