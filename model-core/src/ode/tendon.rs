@@ -371,17 +371,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         t0: &force_state::Tangent<T>,
         dirs: &[force_state::Tangent<T>],
     ) -> force_state::Tangent<T> {
-        let mut end = force_state::Tangent {
+        let translated = force_state::Tangent {
             p: t0.p,
             ..force_state::Tangent::zero()
         };
         // The `(n, m)` directions are `(e_i / L, e_i)`: `t0`'s weights are its stacked wrench.
         let wrench = self.stack(&t0.n, &t0.m);
-        let weights = wrench.iter().copied().chain(t0.th.iter().copied());
-        for (d, w) in dirs.iter().zip(weights) {
-            end = end.axpy(d, w);
-        }
-        end
+        along(translated, dirs, wrench.iter().chain(t0.th.iter()))
     }
 
     fn scale(&self) -> T {
@@ -449,9 +445,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
         // The last Newton pass's `W_next`, `Psi` and `I + W_next Psi` factored, and whether the
-        // next pass may reuse them (a chord step).
+        // next pass may reuse them (a chord step; only ever set after a Newton pass).
         let mut lin = Linearised::blank();
-        let mut linearised = false;
         let mut chord_next = false;
         let mut chord_spent = false;
         // One pass beyond the limit, for the tangents of a solve that converged on its last.
@@ -474,7 +469,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             // contract (a chord step): its look-ahead integrates the state alone, a seventh of
             // one with the six directions.
             // (Not in the second half of the passes: a slow chord must leave Newton the rest.)
-            let chord = count == 0 && chord_next && linearised && 2 * pass <= passes;
+            let chord = count == 0 && chord_next && 2 * pass <= passes;
             // More than three riding tangents are assembled from three turns of the start
             // instead (a tangent is a translation, a turn and a change of `(n, m)`, and the
             // look-ahead is linear; a translation moves its end rigidly, as no rate reads the
@@ -508,7 +503,6 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
             if !chord {
                 self.linearise(guide, &back, poses, &all, &mut lin);
-                linearised = true;
             }
             let Some(step) = lin.lu.solve(&(-g)) else {
                 return false;
@@ -592,7 +586,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             // integrated the tangent before the jump, so its end is corrected along the six
             // directions (the look-ahead is linear in its tangents).
             for (j, t) in tangents.iter_mut().enumerate().take(count) {
-                let ahead = if count > 3 {
+                let ahead = if assemble {
                     self.assembled(&t.rod, &all)
                 } else {
                     let Some(ahead) = all.get(6 + j) else {
@@ -639,11 +633,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     // change of `(n, m)` along the six directions (the look-ahead is linear in its
                     // tangents) it is the tangent there, and the sweep need not step it again.
                     t.prev = pose_delta(&t.rod);
-                    let mut end = *ahead;
-                    for (dir, c) in all.iter().zip((fix + delta).iter()) {
-                        end = end.axpy(dir, *c);
-                    }
-                    t.rod = end;
+                    t.rod = along(*ahead, &all, (fix + delta).iter());
                 }
             }
             y.tangents_ahead = ahead_of_sweep && count > 0;
@@ -674,6 +664,17 @@ impl<T: Scalar> Linearised<T> {
             lu: SMatrix::<T, 6, 6>::identity().lu(),
         }
     }
+}
+
+/// `start` moved along `dirs` by `weights` (as many as both give), in order.
+fn along<'w, T: Scalar>(
+    start: force_state::Tangent<T>,
+    dirs: &[force_state::Tangent<T>],
+    weights: impl Iterator<Item = &'w T>,
+) -> force_state::Tangent<T> {
+    dirs.iter()
+        .zip(weights)
+        .fold(start, |end, (d, w)| end.axpy(d, *w))
 }
 
 /// Each tendon passing `guide` takes its tension beyond (`ahead`) into the next chord.
