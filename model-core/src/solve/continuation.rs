@@ -59,7 +59,7 @@ where
         };
         *load_steps = load_steps.saturating_add(1);
         let iterations_before = work.iterations;
-        let out = newton(&scaled, guess, None, &options, work);
+        let out = newton(&scaled, guess, None, None, &options, work);
         let accepted = out.termination.is_success()
             && (out.x - guess).norm() <= trust
             && verdict(&scaled, &out.sweep).is_acceptable();

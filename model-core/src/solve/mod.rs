@@ -20,6 +20,7 @@ use crate::scalar::from_columns;
 use crate::solve::stopping::default_tolerance;
 use crate::stability::{Stability, classify};
 use crate::sweep::{Sweep, TangentSet};
+pub(crate) use newton::Chord;
 use newton::{Newton, NewtonOptions, Work, newton};
 
 /// Settings of the shooting solve.
@@ -119,18 +120,25 @@ pub(crate) fn solve<T: Scalar, O: RodOde<T, K>, const K: usize>(
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
-    solve_from(ode, start, settings, false)
+    solve_from(ode, start, settings, None)
 }
 
-/// [`solve`] from a start expected to be the answer (`plain_first`): its first sweep goes without
-/// tangents and ends the solve when it meets the tolerance (see [`NewtonOptions::plain_first`]).
-/// Only for equations without a stability test, whose verdict needs no tangents.
+/// A start expected to be the answer: its first sweep goes without tangents and ends the solve
+/// when it meets the tolerance (see [`NewtonOptions::plain_first`]); where it does not, chord steps
+/// with `chord`'s Jacobian, if given ([`Chord`]), before the tangents.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Confirm<'a, T, const K: usize> {
+    pub chord: Option<Chord<'a, T, K>>,
+}
+
+/// [`solve`] from `start`, or from a start expected to be the answer (`confirm`). Confirming only
+/// for equations without a stability test, whose verdict needs no tangents.
 #[inline(never)]
 pub(crate) fn solve_from<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: Option<SVector<T, K>>,
     settings: &ShootingSettings<T>,
-    plain_first: bool,
+    confirm: Option<Confirm<'_, T, K>>,
 ) -> Result<Solved<T, K>, Failed>
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
@@ -183,9 +191,10 @@ where
             max_step_rad: settings.max_rotation_step_rad,
             max_iterations: direct_iterations,
             tangents: TangentSet::unknowns(settings.check_stability),
-            plain_first: plain_first && start.is_some() && !ode.has_stability_test(),
+            plain_first: confirm.is_some() && start.is_some() && !ode.has_stability_test(),
         };
-        let mut out = newton(ode, direct_start, None, &options, &mut work);
+        let chord = confirm.and_then(|c| c.chord);
+        let mut out = newton(ode, direct_start, None, chord, &options, &mut work);
         let stability = check(&mut out);
         (out, stability)
     });

@@ -1,7 +1,9 @@
 //! One damped Newton / Levenberg-Marquardt iteration for the `K` shooting unknowns of any rod
 //! equations: the Newton step when it reduces the residual (`mu = 0`), a damped step
 //! `(J^T J + mu diag(J^T J)) dx = -J^T e` when it does not, with a trust region on the base rotation
-//! `|dx| L`. The Jacobian comes from the sweep's tangents of the unknowns.
+//! `|dx| L`. The Jacobian comes from the sweep's tangents of the unknowns; a start expected to be
+//! the answer is first confirmed by a plain sweep, then, with a Jacobian taken near it by the
+//! caller, by chord steps on plain sweeps ([`Chord`]).
 
 use nalgebra::{Const, DimMin, SMatrix, SVector};
 
@@ -49,6 +51,23 @@ pub(crate) struct NewtonOptions<T> {
 /// Rejected steps tolerated in a row before the solve is declared stalled.
 const MAX_REJECTIONS: u8 = 8;
 
+/// Chord steps at most after a plain first sweep that did not confirm (each one plain sweep).
+const CHORD_STEPS: u8 = 3;
+
+/// The contraction a chord step must reach (its residual over the last) for the next to be tried;
+/// a chord step that lowers the residual less is kept, and the tangents follow.
+const CHORD_CONTRACTION: f64 = 0.25;
+
+/// How a start expected to be the answer is confirmed (see [`NewtonOptions::plain_first`]): a plain
+/// sweep, and where it does not confirm, chord steps with `jacobian` (a sweep's near the start,
+/// taken there for another purpose), each on a plain sweep, while each lowers the residual by
+/// [`CHORD_CONTRACTION`] (at most [`CHORD_STEPS`]); then the tangents. A chord step costs a plain
+/// sweep where Newton's costs one with tangents, and near the answer contracts almost as well.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Chord<'a, T, const K: usize> {
+    pub jacobian: &'a SMatrix<T, K, K>,
+}
+
 /// The outcome of one Newton solve at a fixed load scale.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Newton<T, const K: usize> {
@@ -60,11 +79,12 @@ pub(crate) struct Newton<T, const K: usize> {
 }
 
 /// Damped Newton on the unknowns of `ode` from `start`; `first` is the sweep at `start` when the
-/// caller has it already.
+/// caller has it already; `chord`, a Jacobian for a plain first sweep's chord steps ([`Chord`]).
 pub(crate) fn newton<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: SVector<T, K>,
     first: Option<&Sweep<T, K>>,
+    chord: Option<Chord<'_, T, K>>,
     options: &NewtonOptions<T>,
     work: &mut Work,
 ) -> Newton<T, K>
@@ -94,6 +114,17 @@ where
                 termination: Termination::Converged,
             };
         }
+        let chorded = chord
+            .filter(|_| sw.finite)
+            .is_some_and(|c| chord_steps(ode, &mut x, &mut sw, c.jacobian, options, work));
+        if chorded {
+            return Newton {
+                x,
+                residual: ode.residual_size(&sw.residual),
+                sweep: sw,
+                termination: Termination::Converged,
+            };
+        }
         work.sweep();
         sw = sweep(ode, &x, options.tangents, None);
     }
@@ -104,6 +135,51 @@ where
         residual,
         termination,
     }
+}
+
+/// Chord steps from `x`, whose plain sweep is `sw`, with `jacobian` ([`Chord`]), each within the
+/// trust region: `x` and `sw` move to each step that lowers the residual. Whether the solve is
+/// converged there. Out of line: its trial sweep stays out of the caller's frame.
+#[inline(never)]
+fn chord_steps<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    x: &mut SVector<T, K>,
+    sw: &mut Sweep<T, K>,
+    jacobian: &SMatrix<T, K, K>,
+    options: &NewtonOptions<T>,
+    work: &mut Work,
+) -> bool
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    let lu = jacobian.lu();
+    let max_step = options.max_step_rad / ode.length_m();
+    let mut residual = ode.residual_size(&sw.residual);
+    for _ in 0..CHORD_STEPS {
+        let Some(step) = lu
+            .solve::<Const<K>, Const<1>, _>(&-sw.residual)
+            .filter(|d| d.iter().all(|x| x.is_finite()) && d.norm() <= max_step)
+        else {
+            return false;
+        };
+        work.sweep();
+        work.iterations = work.iterations.saturating_add(1);
+        let trial_x = *x + step;
+        let trial = sweep(ode, &trial_x, TangentSet::NONE, None);
+        let size = ode.residual_size(&trial.residual);
+        if !(trial.finite && size < residual) {
+            return false;
+        }
+        (*x, *sw) = (trial_x, trial);
+        if converged(ode, sw, x, options) {
+            return true;
+        }
+        if size > residual * T::lit(CHORD_CONTRACTION) {
+            return false;
+        }
+        residual = size;
+    }
+    false
 }
 
 /// Whether the sweep `sw` at unknowns `x` meets the options' tolerance.

@@ -17,6 +17,7 @@
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
 
+use super::complementarity::Complementarity;
 use super::joint_step::Sensitivities;
 use super::sensitivity::{sensitivity, tension_scale_n};
 use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
@@ -28,6 +29,7 @@ use crate::model::Model;
 use crate::report::Termination;
 use crate::shooting::ShootingSettings;
 use crate::solve::stopping::default_tolerance;
+use crate::solve::{Chord, Confirm};
 
 /// Settings of the displacement-controlled solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,18 +109,6 @@ struct Carried<'a, T> {
     same: bool,
 }
 
-/// `(a + b - sqrt(a^2 + b^2))` and its partial derivatives (at the kink, those of the smooth part
-/// along `a = b`).
-fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
-    let r = (a * a + b * b).sqrt();
-    if r > T::zero() {
-        (a + b - r, T::one() - a / r, T::one() - b / r)
-    } else {
-        let half = T::one() - T::lit(core::f64::consts::FRAC_1_SQRT_2);
-        (T::zero(), half, half)
-    }
-}
-
 /// `a - b`, as a vector.
 pub(super) fn difference<T: Scalar>(
     a: &[T; MAX_TENDONS],
@@ -152,6 +142,11 @@ fn secant<T: Scalar, const R: usize>(
 /// branch (measured: all three of the bench's tendons taken in 5 cm from rest, where the start
 /// converges nowhere, reached a rod buckled between its guides).
 const PREDICTED_BASE_MOVE: f64 = 0.05;
+
+/// How far above the forward solve's tolerance a start's expected residual may be for its first
+/// sweep to go without tangents, when chord steps can follow it (`crate::solve::Chord`): one chord
+/// step took the firmware's state-change tick from 4.3 times the tolerance to 0.25 times it.
+const CHORD_REACH: f64 = 16.0;
 
 /// Newton iterations of the forward solve a joint step starts (`joint_step.rs`): from a tracking
 /// start it converges in one or two.
@@ -205,65 +200,6 @@ pub(super) fn predict<T: Scalar>(
     tracking
         .allows(&force, &moment)
         .then(|| (force_n + force, moment_nm + moment))
-}
-
-/// The complementarity of tensions and slack for given spool displacements, Fischer-Burmeister:
-/// each tendon's residual `FB(tau / tau_s, phi / r)` and its derivatives.
-pub(super) struct Complementarity<'a, T> {
-    pub tendons: &'a Tendons<T>,
-    pub displacements_m: &'a [T],
-    /// The tension that bends the rod a radian through the largest offset, N.
-    pub tau_scale: T,
-    /// The largest offset, m.
-    pub radius: T,
-}
-
-/// Each tendon's `(d FB / d a, d FB / d b)` at a residual.
-pub(super) type Parts<T> = [(T, T); MAX_TENDONS];
-
-impl<T: Scalar> Complementarity<'_, T> {
-    /// The residual at tensions `tau` when the equilibrium needs the unstretched lengths
-    /// `unstretched_m`, its parts, and the slack.
-    pub(super) fn residual(
-        &self,
-        unstretched_m: &[T],
-        tau: &[T; MAX_TENDONS],
-    ) -> (SVector<T, MAX_TENDONS>, Parts<T>, [T; MAX_TENDONS]) {
-        let phi = self.tendons.slack(self.displacements_m, unstretched_m);
-        let mut r = SVector::<T, MAX_TENDONS>::zeros();
-        let mut parts = [(T::zero(), T::zero()); MAX_TENDONS];
-        for (((r, part), t), p) in r
-            .iter_mut()
-            .zip(parts.iter_mut())
-            .zip(tau)
-            .zip(&phi)
-            .take(self.tendons.len())
-        {
-            let (v, da, db) = fischer_burmeister(*t / self.tau_scale, *p / self.radius);
-            *r = v;
-            *part = (da, db);
-        }
-        (r, parts, phi)
-    }
-
-    /// `d FB / d tau` with the parts of a residual, `d phi / d tau = -s` (`s` the needed
-    /// unstretched lengths' sensitivity to the tensions); identity beyond the tendons.
-    pub(super) fn jacobian(
-        &self,
-        parts: &Parts<T>,
-        s: &SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
-    ) -> SMatrix<T, MAX_TENDONS, MAX_TENDONS> {
-        let count = self.tendons.len();
-        SMatrix::<T, MAX_TENDONS, MAX_TENDONS>::from_fn(|j, i| {
-            if j >= count || i >= count {
-                return if i == j { T::one() } else { T::zero() };
-            }
-            let (da, db) = parts.get(j).copied().unwrap_or((T::zero(), T::zero()));
-            let d_phi = -s.get((j, i)).copied().unwrap_or_else(T::zero);
-            let d_tau = if i == j { T::one() } else { T::zero() };
-            da * d_tau / self.tau_scale + db * d_phi / self.radius
-        })
-    }
 }
 
 impl<T: Scalar> Tendons<T> {
@@ -454,6 +390,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let mut sens = carried.map(|c| *c.sensitivities.d_length_d_tension);
         let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.sensitivities.d_base_d_tension);
         let mut fresh = false;
+        // The joint step's Jacobian of the tip condition (`joint_step.rs`), for the chord steps of
+        // this update's later forward solves, and the expected residual a start within their reach
+        // has: a chord step took the state-change tick's start from four times the tolerance to a
+        // quarter of it.
+        let mut chord: Option<SMatrix<T, 6, 6>> = None;
+        let reach = shooting.tolerance * T::lit(CHORD_REACH);
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
                 termination = current.equilibrium.report.termination;
@@ -482,8 +424,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     }
                 },
             };
-            let jacobian = fb.jacobian(&parts, &s);
-            let Some(step) = jacobian.lu().solve(&(-r)) else {
+            let Some(step) = fb.newton_step((&r, &parts), &s) else {
                 termination = Termination::Singular;
                 break;
             };
@@ -508,9 +449,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 let tracked = predict(anchor, &d_base, &dt, &tracking);
                 let mut predicted = tracked.unwrap_or(anchor);
                 let mut forward = *shooting;
-                // Whether the joint start is expected converged: its first sweep then goes without
-                // tangents (`JointStep::expected_residual` within the forward solve's tolerance).
-                let mut confirm = false;
+                // Whether the start is expected within reach of the joint step's chord steps: its
+                // first sweep then goes without tangents, and where it does not confirm, chord steps
+                // with the joint step's Jacobian follow (`crate::solve::Chord`). The joint start's
+                // `JointStep::expected_residual`; a later step's, the squared size of its predicted
+                // move of the base in tracking scales.
+                let mut confirm = chord.is_some() && {
+                    let moved = d_base * dt;
+                    let (bending, axial) = tracking.size(
+                        &moved.fixed_rows::<3>(0).into_owned(),
+                        &moved.fixed_rows::<3>(3).into_owned(),
+                    );
+                    bending * bending + axial * axial <= reach
+                };
                 // (Not beyond a tracking step: its start would be refused.)
                 let jointed = core::mem::take(&mut joint_pending) && tracked.is_some() && {
                     let carried = Sensitivities {
@@ -524,7 +475,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     stepped.is_some_and(|j| {
                         (trial, predicted) = (j.tensions_n, j.base);
                         dt = difference(&trial, &tau);
-                        confirm = j.expected_residual <= shooting.tolerance;
+                        chord = Some(j.jacobian);
+                        confirm = j.expected_residual <= reach;
                         true
                     })
                 };
@@ -543,7 +495,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     load,
                     Some(predicted),
                     &forward,
-                    confirm,
+                    confirm.then_some(Confirm {
+                        chord: chord.as_ref().map(|jacobian| Chord { jacobian }),
+                    }),
                 )?;
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {

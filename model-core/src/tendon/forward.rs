@@ -15,6 +15,7 @@ use crate::ode::tendon::{GuideRecord, TendonRod};
 use crate::report::Termination;
 use crate::shape::ShapePoint;
 use crate::shooting::{Equilibrium, ShootingSettings, equilibrium, shape_of};
+use crate::solve::Confirm;
 use crate::tendon::guide_force::GuidePose;
 use crate::{MAX_GUIDES, Scalar};
 
@@ -100,12 +101,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let start = start
             .filter(|s| s.is_success())
             .map(|s| (s.equilibrium.base_force_n, s.equilibrium.base_moment_nm));
-        self.solve_tendons_from(tendons, tensions_n, load, start, settings, false)
+        self.solve_tendons_from(tendons, tensions_n, load, start, settings, None)
     }
 
     /// [`Model::solve_tendons`] from a base force (N) and moment (N m), or cold; `confirm`: the
-    /// start is expected to be the answer, its first sweep goes without tangents
-    /// (`crate::solve::solve_from`).
+    /// start is expected to be the answer, its first sweep goes without tangents, then chord steps
+    /// if it brings a Jacobian (`crate::solve::solve_from`).
     pub(crate) fn solve_tendons_from(
         &self,
         tendons: &Tendons<T>,
@@ -113,7 +114,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         load: &TipLoad<T>,
         start: Option<(Vector3<T>, Vector3<T>)>,
         settings: &ShootingSettings<T>,
-        confirm: bool,
+        confirm: Option<Confirm<'_, T, 6>>,
     ) -> Result<TendonEquilibrium<T>, ModelError> {
         tendons.check_model(self)?;
         let tau = tendons.check_tensions(tensions_n)?;
@@ -265,12 +266,13 @@ mod tests {
         let off = (eq.base_force_n * 1.01, eq.base_moment_nm);
         // At the answer the plain sweep confirms (the usual solve's one sweep carries tangents);
         // off it, the plain sweep is one more than the usual solve's four.
+        let plain = Some(Confirm { chord: None });
         for (start, usual_sweeps, more) in [(at, 1, 0), (off, 4, 1)] {
             let again = model
-                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, true)
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, plain)
                 .unwrap();
             let usual = model
-                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, false)
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, None)
                 .unwrap();
             assert!(again.is_success(), "{:?}", again.equilibrium.report);
             assert_eq!(usual.equilibrium.report.sweeps, usual_sweeps);
@@ -278,6 +280,58 @@ mod tests {
                 again.equilibrium.report.sweeps,
                 usual.equilibrium.report.sweeps + more
             );
+            let apart = (again.equilibrium.tip_position_m - eq.tip_position_m).norm();
+            assert!(apart < 1e-12, "tips {apart:e} m apart");
+            assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);
+        }
+    }
+
+    /// A confirming solve that brings a Jacobian near its start takes chord steps on plain sweeps
+    /// where the plain sweep does not confirm, and reaches the usual solve's answer: with the
+    /// Jacobian at the answer from 1 % and 0.1 % off, chord steps alone, in at most the usual
+    /// solve's four sweeps, none with tangents; with a Jacobian of the wrong sign, its chord step
+    /// is refused and the tangents take over, to the same answer.
+    #[test]
+    fn tendon_confirming_solve_takes_chord_steps_to_the_same_answer() {
+        use crate::solve::{Chord, Confirm};
+        use crate::sweep::{TangentSet, sweep};
+        let (model, tendons) = scene(0.0);
+        let set = Tendons::new(&model, &tendons).unwrap();
+        let tau = [2.0, 1.2];
+        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+        let settings = ShootingSettings::default();
+        let solved = model
+            .solve_tendons(&set, &tau, &load, None, &settings)
+            .unwrap();
+        let eq = &solved.equilibrium;
+        let mut all = [0.0; MAX_TENDONS];
+        all[..2].copy_from_slice(&tau);
+        let ode = TendonRod::new(&model, &set, &all, &load, 1.0);
+        let x = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+        let near = sweep(&ode, &x, TangentSet::unknowns(false), None).jacobian();
+        // (Each chord step and each Newton step is an iteration with one sweep; the tangents
+        // after chord steps take one more sweep, at the point the chord steps reached.)
+        for (scale, jacobian, chord_only) in [
+            (1.01, near, true),
+            (1.001, near, true),
+            (1.01, -near, false),
+        ] {
+            let off = (eq.base_force_n * scale, eq.base_moment_nm);
+            let confirm = Some(Confirm {
+                chord: Some(Chord {
+                    jacobian: &jacobian,
+                }),
+            });
+            let again = model
+                .solve_tendons_from(&set, &tau, &load, Some(off), &settings, confirm)
+                .unwrap();
+            assert!(again.is_success(), "{:?}", again.equilibrium.report);
+            let report = &again.equilibrium.report;
+            let extra = if chord_only { 1 } else { 2 };
+            assert_eq!(report.sweeps, report.iterations + extra, "{report:?}");
+            if chord_only {
+                assert!(report.sweeps <= 4, "{report:?}");
+            }
             let apart = (again.equilibrium.tip_position_m - eq.tip_position_m).norm();
             assert!(apart < 1e-12, "tips {apart:e} m apart");
             assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);

@@ -2,13 +2,16 @@
 //! forward solve's predicted start gives the tip condition's residual `r` and Jacobian `J` there,
 //! and how the tendons' paths change along its tangents; with the carried sensitivities that is
 //! a Newton step on both, so that the forward solve at the corrected tensions starts converged to
-//! first order and, on a tracking step, confirms in one more sweep instead of two.
+//! first order and, on a tracking step, confirms in one more sweep (without tangents) instead of
+//! two; where it does not confirm, chord steps with this sweep's `J` follow, each a sweep without
+//! tangents (`crate::solve::Chord`).
 //!
 //! At the plain step's trial tensions `tau` and the predicted base `x_p`, `dx = -J^-1 r` is the
 //! forward solve's own Newton step; the unstretched lengths it leads to are
 //! `N + (dN/dpath)(dpath/dx) dx` (the paths' changes traced by the sweep, `PathChanges`). The
 //! tensions' correction `dtau` solves the complementarity linearised there with the carried
-//! `dN/dtau`, and the base moves on by the carried `d_base dtau` (at a fixed base the tip
+//! `dN/dtau` exactly (Josephy-Newton, `complementarity.rs`: a tendon that goes taut or slack in
+//! the tick does so in this step), and the base moves on by the carried `d_base dtau` (at a fixed base the tip
 //! condition changes by `-J d_base dtau`, so both hold to first order). The forward solve from
 //! there decides: its equilibrium is the step's, checked as every step's is. Frictionless only:
 //! with capstan friction the chords' tensions read the wrap angles, whose changes the sweep does
@@ -16,7 +19,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::actuation::{BaseWrench, Complementarity, Tracking, difference};
+use super::actuation::{BaseWrench, Tracking, difference};
+use super::complementarity::Complementarity;
 use super::paths::lengths;
 use super::{MAX_TENDONS, Tendons};
 use crate::Scalar;
@@ -34,10 +38,13 @@ pub(super) struct JointStep<T> {
     /// The residual expected at the start (dimensionless, as the forward solve's tolerance): the
     /// squares of the base's Newton step, `|dx| L`, and of the tensions' move of the base in
     /// tracking scales (Newton's quadratic convergence; a carried sensitivity's error grows with
-    /// the move). Where it is within the tolerance the forward solve's first sweep goes without
-    /// tangents (at a tendon's change of state, the Newton step's square alone promised a
-    /// converged start that was not).
+    /// the move). Where it is within the chord steps' reach of the tolerance the forward solve's
+    /// first sweep goes without tangents (at a tendon's change of state, the Newton step's square
+    /// alone promised a converged start that was not).
     pub expected_residual: T,
+    /// The tip condition's Jacobian in the forward solve's unknowns at the step's sweep: near the
+    /// start, for the forward solve's chord steps where its confirming sweep does not confirm.
+    pub jacobian: SMatrix<T, 6, 6>,
 }
 
 /// The carried sensitivities a joint step reads: the needed unstretched lengths' and the base's
@@ -89,6 +96,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 tendons, fb, tau, carried, tracking, anchor, &ode, &record, &paths, &x, &dx,
             )
         })
+        .map(|step| JointStep {
+            jacobian: sw.jacobian(),
+            ..step
+        })
     }
 
     /// The joint step after its sweep at `x` (kept in `record`), from the base's Newton step `dx`.
@@ -137,12 +148,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 .fold(T::zero(), |a, (d, x)| a + *d * *x);
             *n += t.unstretched_m(path_change_m, *tension);
         }
-        let (r, parts, _) = fb.residual(needed.get(..count)?, tau);
-        let dtau = fb
-            .jacobian(&parts, carried.d_length_d_tension)
-            .lu()
-            .solve(&(-r))
-            .filter(crate::scalar::all_finite)?;
+        let (r, parts, phi) = fb.residual(needed.get(..count)?, tau);
+        let dtau = fb.josephy_step(tau, &phi, (&r, &parts), carried.d_length_d_tension)?;
         // (Checked before the clamp, which would take a NaN to zero.)
         let mut tensions_n = *tau;
         for (t, d) in tensions_n.iter_mut().zip(dtau.iter()).take(count) {
@@ -167,6 +174,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             tensions_n,
             base: (force_n, moment_nm),
             expected_residual: newton_rad * newton_rad + bending * bending + axial * axial,
+            jacobian: SMatrix::zeros(),
         })
     }
 }

@@ -16,6 +16,7 @@
 //! | the forward solve from tensions | `forward.rs` |
 //! | how paths and tip move with tensions and tip force | `sensitivity.rs` |
 //! | the forward solve from spool displacements: compliance and slack | `actuation.rs` |
+//! | the complementarity of tension and slack: its residual and its step | `complementarity.rs` |
 //! | the inverse: tensions, tip force and shape from displacements (and tensions) | `inverse.rs` |
 //! | continuous routing (Rucker-Webster): the cross-section's law with tendons along it | `distributed.rs` |
 //! | continuous routing: the forward solve and its path lengths | `continuous.rs` |
@@ -24,6 +25,7 @@
 
 mod actuation;
 mod choose;
+mod complementarity;
 mod continuous;
 pub(crate) mod distributed;
 mod forward;
