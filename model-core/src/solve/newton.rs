@@ -43,15 +43,17 @@ pub(crate) struct NewtonOptions<T> {
     /// The tangents each sweep carries (at least the unknowns').
     pub tangents: TangentSet,
     /// Whether the start is expected to be the answer: its sweep goes without tangents and ends
-    /// the solve when it meets the tolerance (otherwise the start is swept again with them).
-    /// Ignored when the caller passes the start's sweep.
+    /// the solve when it meets the tolerance (otherwise chord steps follow where the caller gave a
+    /// Jacobian, [`Chord`], and then a sweep with the tangents). Ignored when the caller passes the
+    /// start's sweep.
     pub plain_first: bool,
 }
 
 /// Rejected steps tolerated in a row before the solve is declared stalled.
 const MAX_REJECTIONS: u8 = 8;
 
-/// Chord steps at most after a plain first sweep that did not confirm (each one plain sweep).
+/// Chord steps at most after a plain first sweep that did not confirm (each one plain sweep and
+/// one of the solve's iterations).
 const CHORD_STEPS: u8 = 3;
 
 /// The contraction a chord step must reach (its residual over the last) for the next to be tried;
@@ -61,7 +63,8 @@ const CHORD_CONTRACTION: f64 = 0.25;
 /// How a start expected to be the answer is confirmed (see [`NewtonOptions::plain_first`]): a plain
 /// sweep, and where it does not confirm, chord steps with `jacobian` (a sweep's near the start,
 /// taken there for another purpose), each on a plain sweep, while each lowers the residual by
-/// [`CHORD_CONTRACTION`] (at most [`CHORD_STEPS`]); then the tangents. A chord step costs a plain
+/// [`CHORD_CONTRACTION`] (at most [`CHORD_STEPS`], each counted among the solve's iterations, and
+/// one fewer than those); then the tangents. A chord step costs a plain
 /// sweep where Newton's costs one with tangents, and near the answer contracts almost as well.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Chord<'a, T, const K: usize> {
@@ -93,6 +96,7 @@ where
 {
     let mut x = start;
     let plain_first = first.is_none() && options.plain_first;
+    let mut rest = *options;
     let mut sw = match first {
         Some(sw) => *sw,
         None => {
@@ -114,9 +118,16 @@ where
                 termination: Termination::Converged,
             };
         }
+        let before = work.iterations;
         let chorded = chord
             .filter(|_| sw.finite)
             .is_some_and(|c| chord_steps(ode, &mut x, &mut sw, c.jacobian, options, work));
+        // Chord steps are iterations of the solve: Newton gets what they left.
+        let used = work.iterations.saturating_sub(before);
+        rest = NewtonOptions {
+            max_iterations: options.max_iterations.saturating_sub(used),
+            ..*options
+        };
         if chorded {
             return Newton {
                 x,
@@ -128,7 +139,7 @@ where
         work.sweep();
         sw = sweep(ode, &x, options.tangents, None);
     }
-    let (residual, termination) = newton_in_place(ode, &mut x, &mut sw, options, work);
+    let (residual, termination) = newton_in_place(ode, &mut x, &mut sw, &rest, work);
     Newton {
         x,
         sweep: sw,
@@ -155,7 +166,9 @@ where
     let lu = jacobian.lu();
     let max_step = options.max_step_rad / ode.length_m();
     let mut residual = ode.residual_size(&sw.residual);
-    for _ in 0..CHORD_STEPS {
+    // (At least one Newton iteration is left after them.)
+    let steps = u16::from(CHORD_STEPS).min(options.max_iterations.saturating_sub(1));
+    for _ in 0..steps {
         let Some(step) = lu
             .solve::<Const<K>, Const<1>, _>(&-sw.residual)
             .filter(|d| d.iter().all(|x| x.is_finite()) && d.norm() <= max_step)

@@ -450,10 +450,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 let mut predicted = tracked.unwrap_or(anchor);
                 let mut forward = *shooting;
                 // Whether the start is expected within reach of the joint step's chord steps: its
-                // first sweep then goes without tangents, and where it does not confirm, chord steps
-                // with the joint step's Jacobian follow (`crate::solve::Chord`). The joint start's
-                // `JointStep::expected_residual`; a later step's, the squared size of its predicted
-                // move of the base in tracking scales.
+                // first sweep then goes without tangents, and where it does not confirm, chord
+                // steps with the joint step's Jacobian follow (`crate::solve::Chord`). The joint
+                // start's expected residual is `JointStep::expected_residual`; a later step's, the
+                // squared size of its predicted move of the base in tracking scales.
                 let mut confirm = chord.is_some() && {
                     let moved = d_base * dt;
                     let (bending, axial) = tracking.size(

@@ -16,8 +16,8 @@
 //!   firmware's tendons taut at up to 1.3 N where two are, at 0.93 N and 0.04 N (that cold solve
 //!   took 48 sweeps instead of 39), so cold solves keep the semi-smooth step.
 //!
-//! Where the pivoting finds no answer (a carried sensitivity that is not a P-matrix), Josephy's
-//! step is the semi-smooth one.
+//! Where the pivoting finds no answer (a carried sensitivity that is not a P-matrix, or pivots
+//! beyond [`MAX_PIVOTS`]), Josephy's step is the semi-smooth one.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -25,8 +25,10 @@ use super::{MAX_TENDONS, Tendons};
 use crate::Scalar;
 
 /// Most principal pivots of a linear complementarity step. Murty's rule ends for a P-matrix (the
-/// compliance `-dN/dtau` of a stable equilibrium is symmetric positive definite); from the
-/// current tendons' states a step takes none or one.
+/// compliance `-dN/dtau` of a stable equilibrium is symmetric positive definite), but only within
+/// `2^n` pivots in the worst case; the cap bounds a step's cost and covers that worst case up to
+/// four tendons. Beyond the cap the step is the semi-smooth one. From the current tendons' states
+/// a tick's step takes none or one.
 const MAX_PIVOTS: usize = 2 * MAX_TENDONS;
 
 /// `(a + b - sqrt(a^2 + b^2))` and its partial derivatives (at the kink, those of the smooth part
@@ -277,7 +279,7 @@ mod tests {
     proptest! {
         /// For a symmetric positive definite compliance `-s` (a P-matrix: the complementarity has
         /// one answer) the step lands on it from any start: tensions and linearised slack at least
-        /// zero, one of them zero for each tendon.
+        /// zero, one of them zero for each tendon; up to four tendons it always finds it.
         #[test]
         fn tendon_linear_complementarity_is_solved(
             count in 1usize..=MAX_TENDONS,
@@ -292,8 +294,11 @@ mod tests {
             let tau: [f64; MAX_TENDONS] = core::array::from_fn(|j| tau[j]);
             let phi: [f64; MAX_TENDONS] = core::array::from_fn(|j| phi[j]);
             let step = linear_step(&unit(count), &tau, &phi, &s);
-            prop_assert!(step.is_some());
-            let (z, w) = solved(count, &tau, &phi, &s, &step.unwrap());
+            // (Within the pivots' cap, Murty's worst case, up to four tendons; beyond, a step
+            // given is the answer.)
+            prop_assert!(step.is_some() || count > 4);
+            let Some(step) = step else { return Ok(()) };
+            let (z, w) = solved(count, &tau, &phi, &s, &step);
             let scale = 1e-9 * (1.0 + compliance.amax()) * 10.0;
             for j in 0..count {
                 prop_assert!(z[j] >= -scale && w[j] >= -scale, "{j}: z {} w {}", z[j], w[j]);

@@ -11,11 +11,11 @@
 //! `N + (dN/dpath)(dpath/dx) dx` (the paths' changes traced by the sweep, `PathChanges`). The
 //! tensions' correction `dtau` solves the complementarity linearised there with the carried
 //! `dN/dtau` exactly (Josephy-Newton, `complementarity.rs`: a tendon that goes taut or slack in
-//! the tick does so in this step), and the base moves on by the carried `d_base dtau` (at a fixed base the tip
-//! condition changes by `-J d_base dtau`, so both hold to first order). The forward solve from
-//! there decides: its equilibrium is the step's, checked as every step's is. Frictionless only:
-//! with capstan friction the chords' tensions read the wrap angles, whose changes the sweep does
-//! not trace.
+//! the tick does so in this step), and the base moves on by the carried `d_base dtau` (at a fixed
+//! base the tip condition changes by `-J d_base dtau`, so both hold to first order). The forward
+//! solve from there decides: its equilibrium is the step's, checked as every step's is.
+//! Frictionless only: with capstan friction the chords' tensions read the wrap angles, whose
+//! changes the sweep does not trace.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -45,6 +45,14 @@ pub(super) struct JointStep<T> {
     /// The tip condition's Jacobian in the forward solve's unknowns at the step's sweep: near the
     /// start, for the forward solve's chord steps where its confirming sweep does not confirm.
     pub jacobian: SMatrix<T, 6, 6>,
+}
+
+/// The joint step's sweep: its unknowns `x`, the tip condition's Jacobian there and its Newton
+/// step `dx`.
+struct JointSweep<'a, T> {
+    x: &'a SVector<T, 6>,
+    dx: &'a SVector<T, 6>,
+    jacobian: &'a SMatrix<T, 6, 6>,
 }
 
 /// The carried sensitivities a joint step reads: the needed unstretched lengths' and the base's
@@ -85,24 +93,27 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             .jumping_ahead();
         let x = ode.unknowns(&start.0, &start.1);
         let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
+        let jacobian = sw.jacobian();
         // The forward solve's Newton step at these tensions.
         let dx = sw
             .finite
-            .then(|| sw.jacobian().lu().solve(&(-sw.residual)))
+            .then(|| jacobian.lu().solve(&(-sw.residual)))
             .flatten()
             .filter(crate::scalar::all_finite);
         dx.and_then(|dx| {
+            let at = JointSweep {
+                x: &x,
+                dx: &dx,
+                jacobian: &jacobian,
+            };
             self.joint_from(
-                tendons, fb, tau, carried, tracking, anchor, &ode, &record, &paths, &x, &dx,
+                tendons, fb, tau, carried, tracking, anchor, &ode, &record, &paths, &at,
             )
-        })
-        .map(|step| JointStep {
-            jacobian: sw.jacobian(),
-            ..step
         })
     }
 
-    /// The joint step after its sweep at `x` (kept in `record`), from the base's Newton step `dx`.
+    /// The joint step after its sweep at `x` (kept in `record`), from the base's Newton step `dx`
+    /// (`JointSweep`).
     /// Out of line: its buffers (the guides' poses, the complementarity's Jacobian) stay out of
     /// the sweep's frame.
     #[allow(clippy::too_many_arguments)]
@@ -118,8 +129,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         ode: &TendonRod<'_, T, A, NODES>,
         record: &GuideRecord<T>,
         paths: &PathChanges<T>,
-        x: &SVector<T, 6>,
-        dx: &SVector<T, 6>,
+        &JointSweep { x, dx, jacobian }: &JointSweep<'_, T>,
     ) -> Option<JointStep<T>> {
         let count = tendons.len();
         let guides = tendons.guide_s_m.len();
@@ -174,7 +184,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             tensions_n,
             base: (force_n, moment_nm),
             expected_residual: newton_rad * newton_rad + bending * bending + axial * axial,
-            jacobian: SMatrix::zeros(),
+            jacobian: *jacobian,
         })
     }
 }
