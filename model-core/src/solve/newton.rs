@@ -96,7 +96,8 @@ where
 {
     let mut x = start;
     let plain_first = first.is_none() && options.plain_first;
-    let mut rest = *options;
+    // Iterations the chord steps used: Newton gets what they left.
+    let mut used = 0u16;
     let mut sw = match first {
         Some(sw) => *sw,
         None => {
@@ -110,25 +111,13 @@ where
         }
     };
     if plain_first {
-        if sw.finite && converged(ode, &sw, &x, options) {
-            return Newton {
-                x,
-                residual: ode.residual_size(&sw.residual),
-                sweep: sw,
-                termination: Termination::Converged,
-            };
-        }
         let before = work.iterations;
-        let chorded = chord
-            .filter(|_| sw.finite)
-            .is_some_and(|c| chord_steps(ode, &mut x, &mut sw, c.jacobian, options, work));
-        // Chord steps are iterations of the solve: Newton gets what they left.
-        let used = work.iterations.saturating_sub(before);
-        rest = NewtonOptions {
-            max_iterations: options.max_iterations.saturating_sub(used),
-            ..*options
-        };
-        if chorded {
+        let confirmed = sw.finite
+            && (converged(ode, &sw, &x, options)
+                || chord
+                    .is_some_and(|c| chord_steps(ode, &mut x, &mut sw, c.jacobian, options, work)));
+        used = work.iterations.saturating_sub(before);
+        if confirmed {
             return Newton {
                 x,
                 residual: ode.residual_size(&sw.residual),
@@ -139,6 +128,10 @@ where
         work.sweep();
         sw = sweep(ode, &x, options.tangents, None);
     }
+    let rest = NewtonOptions {
+        max_iterations: options.max_iterations.saturating_sub(used),
+        ..*options
+    };
     let (residual, termination) = newton_in_place(ode, &mut x, &mut sw, &rest, work);
     Newton {
         x,

@@ -181,24 +181,39 @@ impl<T: Scalar> Tracking<T> {
         let limit = T::lit(PREDICTED_BASE_MOVE);
         bending <= limit && axial <= limit
     }
+
+    /// The squared size of a predicted move of the base in these scales, bending and axial
+    /// summed: the residual a forward solve started there is expected to have from the carried
+    /// sensitivity's error, which grows with the move.
+    pub(super) fn squared(&self, (force_n, moment_nm): &BaseWrench<T>) -> T {
+        let (bending, axial) = self.size(force_n, moment_nm);
+        bending * bending + axial * axial
+    }
 }
 
-/// Where a forward solve at tensions changed by `dt` starts, base force (N) and moment (N m):
-/// those given, moved by `d_base dt`, if that move is a tracking step (else `None`: the solve
-/// starts from those given).
-pub(super) fn predict<T: Scalar>(
-    (force_n, moment_nm): BaseWrench<T>,
+/// The base's predicted move, force (N) and moment (N m), for tensions changed by `dt`:
+/// `d_base dt`.
+pub(super) fn base_move<T: Scalar>(
     d_base: &SMatrix<T, 6, MAX_TENDONS>,
     dt: &SVector<T, MAX_TENDONS>,
-    tracking: &Tracking<T>,
-) -> Option<BaseWrench<T>> {
+) -> BaseWrench<T> {
     let moved = d_base * dt;
-    let (force, moment) = (
+    (
         moved.fixed_rows::<3>(0).into_owned(),
         moved.fixed_rows::<3>(3).into_owned(),
-    );
+    )
+}
+
+/// Where a forward solve starts, base force (N) and moment (N m): those given, plus the predicted
+/// `moved` ([`base_move`]), if that move is a tracking step (else `None`: the solve starts from
+/// those given).
+pub(super) fn predict<T: Scalar>(
+    (force_n, moment_nm): BaseWrench<T>,
+    (force, moment): &BaseWrench<T>,
+    tracking: &Tracking<T>,
+) -> Option<BaseWrench<T>> {
     tracking
-        .allows(&force, &moment)
+        .allows(force, moment)
         .then(|| (force_n + force, moment_nm + moment))
 }
 
@@ -446,7 +461,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     *t = (*now + *d * alpha).max(T::zero());
                 }
                 let mut dt = difference(&trial, &tau);
-                let tracked = predict(anchor, &d_base, &dt, &tracking);
+                let moved = base_move(&d_base, &dt);
+                let tracked = predict(anchor, &moved, &tracking);
                 let mut predicted = tracked.unwrap_or(anchor);
                 let mut forward = *shooting;
                 // Whether the start is expected within reach of the joint step's chord steps: its
@@ -454,14 +470,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 // steps with the joint step's Jacobian follow (`crate::solve::Chord`). The joint
                 // start's expected residual is `JointStep::expected_residual`; a later step's, the
                 // squared size of its predicted move of the base in tracking scales.
-                let mut confirm = chord.is_some() && {
-                    let moved = d_base * dt;
-                    let (bending, axial) = tracking.size(
-                        &moved.fixed_rows::<3>(0).into_owned(),
-                        &moved.fixed_rows::<3>(3).into_owned(),
-                    );
-                    bending * bending + axial * axial <= reach
-                };
+                let mut confirm = chord.is_some() && tracking.squared(&moved) <= reach;
                 // (Not beyond a tracking step: its start would be refused.)
                 let jointed = core::mem::take(&mut joint_pending) && tracked.is_some() && {
                     let carried = Sensitivities {

@@ -90,9 +90,7 @@ impl<T: Scalar> Complementarity<'_, T> {
             radius: self.radius,
         }
     }
-}
 
-impl<T: Scalar> Complementarity<'_, T> {
     /// The semi-smooth Newton step on the residual `r` (with its `parts`), with `s = dN/dtau`.
     /// `None` where it is not finite.
     pub(super) fn newton_step(

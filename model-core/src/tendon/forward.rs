@@ -248,19 +248,42 @@ mod tests {
         (model, tendons)
     }
 
+    /// The confirming solves' tensions, N.
+    const CONFIRMING_TENSIONS_N: [f64; 2] = [2.0, 1.2];
+
+    /// The confirming solves' scene (frictionless), its tendons, tip load, and the usual solve's
+    /// answer at [`CONFIRMING_TENSIONS_N`].
+    fn confirming() -> (
+        Model<f64>,
+        Tendons<f64>,
+        TipLoad<f64>,
+        TendonEquilibrium<f64>,
+    ) {
+        let (model, tendons) = scene(0.0);
+        let set = Tendons::new(&model, &tendons).unwrap();
+        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+        let settings = ShootingSettings::default();
+        let solved = model
+            .solve_tendons(&set, &CONFIRMING_TENSIONS_N, &load, None, &settings)
+            .unwrap();
+        (model, set, load, solved)
+    }
+
+    /// `again` is `solved`'s answer: its tip and its first path within 1e-12 m.
+    fn assert_same_answer(again: &TendonEquilibrium<f64>, solved: &TendonEquilibrium<f64>) {
+        let tip = solved.equilibrium.tip_position_m;
+        let apart = (again.equilibrium.tip_position_m - tip).norm();
+        assert!(apart < 1e-12, "tips {apart:e} m apart");
+        assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);
+    }
+
     /// A solve started at its answer and expected converged takes one sweep (without tangents:
     /// `expected/bench.run`'s median warm update counts it); one expected converged that is not
     /// takes one sweep more than the usual solve from there and reaches the same answer.
     #[test]
     fn tendon_confirming_solve_takes_one_sweep_at_the_answer() {
-        let (model, tendons) = scene(0.0);
-        let set = Tendons::new(&model, &tendons).unwrap();
-        let tau = [2.0, 1.2];
-        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
-        let settings = ShootingSettings::default();
-        let solved = model
-            .solve_tendons(&set, &tau, &load, None, &settings)
-            .unwrap();
+        let (model, set, load, solved) = confirming();
+        let (tau, settings) = (CONFIRMING_TENSIONS_N, ShootingSettings::default());
         let eq = &solved.equilibrium;
         let at = (eq.base_force_n, eq.base_moment_nm);
         let off = (eq.base_force_n * 1.01, eq.base_moment_nm);
@@ -280,9 +303,7 @@ mod tests {
                 again.equilibrium.report.sweeps,
                 usual.equilibrium.report.sweeps + more
             );
-            let apart = (again.equilibrium.tip_position_m - eq.tip_position_m).norm();
-            assert!(apart < 1e-12, "tips {apart:e} m apart");
-            assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);
+            assert_same_answer(&again, &solved);
         }
     }
 
@@ -295,14 +316,8 @@ mod tests {
     fn tendon_confirming_solve_takes_chord_steps_to_the_same_answer() {
         use crate::solve::{Chord, Confirm};
         use crate::sweep::{TangentSet, sweep};
-        let (model, tendons) = scene(0.0);
-        let set = Tendons::new(&model, &tendons).unwrap();
-        let tau = [2.0, 1.2];
-        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
-        let settings = ShootingSettings::default();
-        let solved = model
-            .solve_tendons(&set, &tau, &load, None, &settings)
-            .unwrap();
+        let (model, set, load, solved) = confirming();
+        let (tau, settings) = (CONFIRMING_TENSIONS_N, ShootingSettings::default());
         let eq = &solved.equilibrium;
         let mut all = [0.0; MAX_TENDONS];
         all[..2].copy_from_slice(&tau);
@@ -332,9 +347,7 @@ mod tests {
             if chord_only {
                 assert!(report.sweeps <= 4, "{report:?}");
             }
-            let apart = (again.equilibrium.tip_position_m - eq.tip_position_m).norm();
-            assert!(apart < 1e-12, "tips {apart:e} m apart");
-            assert!((again.path_m[0] - solved.path_m[0]).abs() < 1e-12);
+            assert_same_answer(&again, &solved);
         }
     }
 

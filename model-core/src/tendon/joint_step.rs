@@ -19,7 +19,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::actuation::{BaseWrench, Tracking, difference};
+use super::actuation::{BaseWrench, Tracking, base_move, difference};
 use super::complementarity::Complementarity;
 use super::paths::lengths;
 use super::{MAX_TENDONS, Tendons};
@@ -167,23 +167,18 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         }
         // Where the forward solve starts: the base after its Newton step, moved on by the
         // tensions' step, within a tracking step of the last equilibrium's.
-        let moved = carried.d_base_d_tension * difference(&tensions_n, tau);
-        let (moved_force_n, moved_moment_nm) = (
-            moved.fixed_rows::<3>(0).into_owned(),
-            moved.fixed_rows::<3>(3).into_owned(),
-        );
+        let moved = base_move(carried.d_base_d_tension, &difference(&tensions_n, tau));
         let (_, force_n, moment_nm) = ode.base(&(x + dx));
-        let force_n = force_n + moved_force_n;
-        let moment_nm = moment_nm + moved_moment_nm;
+        let force_n = force_n + moved.0;
+        let moment_nm = moment_nm + moved.1;
         if !tracking.allows(&(force_n - anchor_force_n), &(moment_nm - anchor_moment_nm)) {
             return None;
         }
         let newton_rad = dx.norm() * self.length_m();
-        let (bending, axial) = tracking.size(&moved_force_n, &moved_moment_nm);
         Some(JointStep {
             tensions_n,
             base: (force_n, moment_nm),
-            expected_residual: newton_rad * newton_rad + bending * bending + axial * axial,
+            expected_residual: newton_rad * newton_rad + tracking.squared(&moved),
             jacobian: *jacobian,
         })
     }
