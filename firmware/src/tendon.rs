@@ -166,6 +166,9 @@ fn tension_error(solved: &TendonEquilibrium<f32>, tensions_n: &[f64]) -> f64 {
 ///
 /// # Errors
 /// If the model refuses the bench or an input.
+// Out of line, as `run_trajectory`: each has its own model and solves, so the two never share
+// a frame (the image's RAM budget).
+#[inline(never)]
 pub fn run_golden(
     clock: &dyn Fn() -> u64,
     report: &mut dyn FnMut(&CaseCheck),
@@ -244,11 +247,17 @@ pub fn run_golden(
 ///
 /// # Errors
 /// If the model refuses the bench or an input.
+#[inline(never)]
 pub fn run_trajectory(
     clock: &dyn Fn() -> u64,
     report: &mut dyn FnMut(&CaseCheck),
 ) -> Result<Summary, ModelError> {
-    let (model, tendons) = robot(true)?;
+    // Read in place, not moved out of the result: a move kept both copies in the frame.
+    let robot = robot(true);
+    let (model, tendons) = match &robot {
+        Ok((model, tendons)) => (model, tendons),
+        Err(e) => return Err(*e),
+    };
     let shooting = ShootingSettings::default();
     let mut summary = Summary::default();
     let mut previous: Option<DisplacementSolve<f32>> = None;
@@ -258,7 +267,7 @@ pub fn run_trajectory(
         let start = clock();
         let out = match &previous {
             None => model.solve_displacements(
-                &tendons,
+                tendons,
                 &d,
                 &TipLoad::zero(),
                 None,
@@ -266,7 +275,7 @@ pub fn run_trajectory(
                 &settings,
             )?,
             Some(p) => model.update_displacements(
-                &tendons,
+                tendons,
                 &d,
                 &TipLoad::zero(),
                 p,

@@ -177,6 +177,82 @@ impl<T: Scalar> GuideRecord<T> {
     }
 }
 
+/// Where each guide's implicit jump converged in the sweeps so far, and the Newton matrix
+/// `I + W_next Psi` of its last Newton pass, factored: a sweep without tangents near them (a control loop's
+/// confirming and chord sweeps, a tick after the one before) starts each jump there and takes
+/// chord steps on that matrix, a look-ahead of the state alone each, instead of a Newton pass that
+/// carries the six directions of `(n, m)` through the segment (MODEL.md §6.5). Lent to the
+/// equations of several forward solves ([`TendonRod::remembering`]); sized by the plan's nodes,
+/// as every guide is one.
+#[derive(Debug)]
+pub(crate) struct JumpMemory<T: Scalar, const NODES: usize> {
+    jumps: [Cell<Option<Remembered<T>>>; NODES],
+    /// Jumps that converged on remembered factors, without a Newton pass (for the tests).
+    #[cfg(test)]
+    recalled: Cell<u32>,
+}
+
+/// One guide's remembered jump.
+#[derive(Clone, Copy, Debug)]
+struct Remembered<T: Scalar> {
+    /// The load scale it was solved at.
+    alpha: T,
+    /// The jump's wrench `W`, stacked `(f L, m)`: `(n, m)(s+) = (n, m)(s-) - W`.
+    wrench: SVector<T, 6>,
+    /// `I + W_next Psi` of the last Newton pass there, factored.
+    lu: Lu6<T>,
+}
+
+impl<T: Scalar, const NODES: usize> JumpMemory<T, NODES> {
+    /// A memory of no jumps.
+    pub(crate) fn new() -> Self {
+        Self {
+            jumps: core::array::from_fn(|_| Cell::new(None)),
+            #[cfg(test)]
+            recalled: Cell::new(0),
+        }
+    }
+
+    /// How many jumps converged on remembered factors alone, without a Newton pass.
+    #[cfg(test)]
+    pub(crate) fn recalled(&self) -> u32 {
+        self.recalled.get()
+    }
+
+    /// The wrench of `guide`'s remembered jump at load scale `alpha`, its factors into `lu`.
+    // Out of line, as `keep`: the factors' copies inlined into the sweep took 1.3 KB of the
+    // controller's flash (and a `memmove`, 1.5 KB).
+    #[inline(never)]
+    fn recall(&self, guide: usize, alpha: T, lu: &mut Lu6<T>) -> Option<SVector<T, 6>> {
+        let r = self
+            .jumps
+            .get(guide)
+            .and_then(Cell::get)
+            .filter(|r| r.alpha == alpha)?;
+        *lu = r.lu;
+        Some(r.wrench)
+    }
+
+    /// Keeps `guide`'s jump: its wrench and factors at load scale `alpha`.
+    /// `recalled`: whether the jump converged on the remembered factors alone.
+    #[inline(never)]
+    fn keep(&self, guide: usize, alpha: T, wrench: &SVector<T, 6>, lu: &Lu6<T>, recalled: bool) {
+        #[cfg(test)]
+        if recalled {
+            self.recalled.set(self.recalled.get().saturating_add(1));
+        }
+        #[cfg(not(test))]
+        let _ = recalled;
+        if let Some(cell) = self.jumps.get(guide) {
+            cell.set(Some(Remembered {
+                alpha,
+                wrench: *wrench,
+                lu: *lu,
+            }));
+        }
+    }
+}
+
 /// The rod under dead loads and the tendons' tensions.
 #[derive(Debug)]
 pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
@@ -184,6 +260,7 @@ pub(crate) struct TendonRod<'a, T: Scalar, A: Attitude<T>, const NODES: usize> {
     model: &'a Model<T, A, NODES>,
     tendons: &'a Tendons<T>,
     record: Option<&'a GuideRecord<T>>,
+    memory: Option<&'a JumpMemory<T, NODES>>,
     paths: Option<&'a PathChanges<T>>,
     /// Whether the sweep takes its tangents from a jump's look-ahead one predicted correction
     /// from the answer too, not only at rounding ([`TendonRod::jumping_ahead`]).
@@ -217,6 +294,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             model,
             tendons,
             record: None,
+            memory: None,
             paths: None,
             jump_ahead: false,
             tensions_n: *tensions_n,
@@ -228,6 +306,15 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
     pub(crate) fn recording(self, record: &'a GuideRecord<T>) -> Self {
         Self {
             record: Some(record),
+            ..self
+        }
+    }
+
+    /// These equations, their jumps starting from and kept in `memory` (sweeps without tangents
+    /// start there; every sweep keeps its own).
+    pub(crate) fn remembering(self, memory: &'a JumpMemory<T, NODES>) -> Self {
+        Self {
+            memory: Some(memory),
             ..self
         }
     }
@@ -424,7 +511,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let w0 = self
             .load(guide, &back, [&prev, &cur, &predicted], None)
             .wrench;
-        let (mut n, mut m) = (n_minus - w0.force_n, m_minus - w0.moment_nm);
+        let straight = (n_minus - w0.force_n, m_minus - w0.moment_nm);
+        let (mut n, mut m) = straight;
 
         let count = tangents.len().min(MAX_TANGENTS);
         let scale = self.stack(&n_minus, &m_minus).norm()
@@ -449,6 +537,23 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut lin = Linearised::blank();
         let mut chord_next = false;
         let mut chord_spent = false;
+        // A sweep without tangents starts where this guide's jump converged before and takes chord
+        // steps on that jump's Newton matrix (`JumpMemory`). The first has no contraction to show
+        // and is taken; the next shows it. Until a Newton pass, a step that is not finite (a
+        // look-ahead that was not) starts the jump again straight ahead, as without a memory.
+        let remembered = self
+            .memory
+            .filter(|_| count == 0)
+            .and_then(|memory| memory.recall(guide, self.scale(), &mut lin.lu));
+        let mut first_remembered = false;
+        let mut retreat = false;
+        // Whether a Newton pass replaced the remembered factors.
+        let mut linearised = false;
+        if let Some(wrench) = &remembered {
+            let (f, moment) = split(wrench);
+            (n, m) = (n_minus - f / length, m_minus - moment);
+            (chord_next, first_remembered, retreat) = (true, true, true);
+        }
         // One pass beyond the limit, for the tangents of a solve that converged on its last.
         let mut passes = MAX_JUMP_ITERATIONS;
         let mut pass = 0;
@@ -503,13 +608,18 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
             let g = self.stack(&(n - n_minus + w.force_n), &(m - m_minus + w.moment_nm));
             if !chord {
                 self.linearise(guide, &back, poses, &all, &mut lin);
+                (retreat, linearised) = (false, true);
             }
-            let Some(step) = lin.lu.solve(&(-g)) else {
+            let step = lin.lu.solve(&(-g)).filter(crate::scalar::all_finite);
+            let Some(step) = step else {
+                if core::mem::take(&mut retreat) {
+                    (n, m) = straight;
+                    (chord_next, chord_spent, first_remembered) = (false, true, false);
+                    last_step = None;
+                    continue;
+                }
                 return false;
             };
-            if !crate::scalar::all_finite(&step) {
-                return false;
-            }
             let (dn, dm) = split(&step);
             let size = step.norm();
             if chord {
@@ -517,7 +627,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 // step taken. One that does not halve is not taken (far from the last Newton
                 // point its Jacobian may be nothing like the jump's): Newton goes on from here.
                 let rho = last_step.filter(|p| *p > T::zero()).map(|p| size / p);
-                if !rho.is_some_and(|r| r <= T::lit(0.5)) {
+                let first = core::mem::take(&mut first_remembered);
+                if !(first || rho.is_some_and(|r| r <= T::lit(0.5))) {
                     chord_next = false;
                     chord_spent = true;
                     continue;
@@ -529,7 +640,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 // sixteen ends the chord steps of this jump.
                 last_newton = None;
                 contraction = None;
-                chord_next = rho.is_some_and(|r| r <= T::lit(0.0625));
+                chord_next = first || rho.is_some_and(|r| r <= T::lit(0.0625));
                 chord_spent = chord_spent || !chord_next;
                 let done = size <= done_at
                     || (!friction
@@ -636,6 +747,12 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                     t.rod = along(*ahead, &all, (fix + delta).iter());
                 }
             }
+            if let Some(memory) = self.memory {
+                // (`lin` holds the remembered factors where no Newton pass replaced them.)
+                let wrench = self.stack(&(n_minus - n), &(m_minus - m));
+                let recalled = remembered.is_some() && !linearised;
+                memory.keep(guide, self.scale(), &wrench, &lin.lu, recalled);
+            }
             y.tangents_ahead = ahead_of_sweep && count > 0;
             carry(&self.tendons.routed, guide, &here.ahead_n, &mut y.chord_n);
             y.rod.n = n;
@@ -652,8 +769,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
 struct Linearised<T: Scalar> {
     w_next: SMatrix<T, 6, 6>,
     psi: SMatrix<T, 6, 6>,
-    lu: nalgebra::linalg::LU<T, nalgebra::Const<6>, nalgebra::Const<6>>,
+    lu: Lu6<T>,
 }
+
+/// A 6 x 6 matrix's LU factors.
+type Lu6<T> = nalgebra::linalg::LU<T, nalgebra::Const<6>, nalgebra::Const<6>>;
 
 impl<T: Scalar> Linearised<T> {
     /// Before the first Newton pass (never used: a chord step needs one).
@@ -1130,6 +1250,101 @@ pub(crate) mod tests {
                 plain.residual.norm()
             );
             assert!((plain.residual - with.residual).norm() < 1e-12, "{tau:?}");
+        }
+    }
+
+    /// A plain sweep on remembered jumps (`JumpMemory`) gives the sweep without them: near the
+    /// sweep they were kept at (the jumps then converge on the remembered factors alone, one
+    /// per jump and sweep), far from it (new tensions and a base moved by a tenth, where chord
+    /// steps may be refused), and from a memory kept at another load scale (not read).
+    #[test]
+    fn tendon_remembered_jumps_give_the_same_sweeps() {
+        let (model, tendons) = scene();
+        let tendons = Tendons::new(&model, &tendons).unwrap();
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        let tension = |t: [f64; 2]| {
+            let mut full = [0.0; MAX_TENDONS];
+            full[..2].copy_from_slice(&t);
+            full
+        };
+        let tau = tension([2.0, 1.5]);
+        let eq = model
+            .solve_tendons(&tendons, &tau[..2], &load, None, &Default::default())
+            .unwrap();
+        assert!(eq.is_success());
+        let eqb = &eq.equilibrium;
+        let ode = TendonRod::new(&model, &tendons, &tau, &load, 1.0);
+        let x = ode.unknowns(&eqb.base_force_n, &eqb.base_moment_nm);
+        // Jumps where a tendon passes: guides 0-2 (the last is the tip's termination).
+        let jumps = 3usize;
+        let memory = JumpMemory::new();
+        let kept = ode.remembering(&memory);
+        assert!(sweep(&kept, &x, TangentSet::unknowns(false), None).finite);
+        assert_eq!(
+            memory.recalled(),
+            0,
+            "a sweep with tangents does not read the memory"
+        );
+        let same =
+            |tau: &[f64; MAX_TENDONS], x: &SVector<f64, 6>, memory: &JumpMemory<f64, MAX_NODES>| {
+                let plain = TendonRod::new(&model, &tendons, tau, &load, 1.0);
+                let remembering = plain.remembering(memory);
+                let (a, b) = (
+                    sweep(&plain, x, TangentSet::NONE, None),
+                    sweep(&remembering, x, TangentSet::NONE, None),
+                );
+                assert!(
+                    a.finite && b.finite,
+                    "{tau:?} {x:?}: finite {} {}",
+                    a.finite,
+                    b.finite
+                );
+                let scale = a.residual.norm().max(model.moment_scale_nm());
+                // Each jump ends within its rounding (`done_at`, 16 eps of its wrench) either way.
+                let off = (a.residual - b.residual).norm() / scale;
+                assert!(off < 1e-12, "residuals {off:e} apart (relative)");
+                assert!((a.tip_position_m - b.tip_position_m).norm() < 1e-13);
+            };
+        let mut recalled = 0;
+        for (k, (t, dx)) in [
+            ([2.0, 1.5], 0.0),
+            ([2.0, 1.5], 1e-6),
+            ([2.01, 1.49], 1e-4),
+            ([2.02, 1.5], 1e-3),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let moved = x.map(|v| v * (1.0 + dx) + dx * 1e-3);
+            same(&tension(t), &moved, &memory);
+            recalled += jumps as u32;
+            assert_eq!(memory.recalled(), recalled, "case {k}: every jump recalled");
+        }
+        // Far: chord steps on the remembered factors may be refused; Newton then goes on.
+        for (t, dx) in [([3.0, 0.5], 0.1), ([0.5, 3.0], -0.1), ([8.0, 4.0], 0.05)] {
+            same(&tension(t), &x.map(|v| v * (1.0 + dx)), &memory);
+        }
+        // A memory kept at another load scale is not read.
+        let other = JumpMemory::new();
+        let half = TendonRod::new(&model, &tendons, &tau, &load, 0.5).remembering(&other);
+        assert!(sweep(&half, &(x * 0.5), TangentSet::unknowns(false), None).finite);
+        same(&tau, &x, &other);
+        assert_eq!(other.recalled(), 0);
+        // An absurd memory is left for the straight-ahead start: a wrench no look-ahead survives,
+        // singular factors.
+        for (wrench, matrix) in [
+            (
+                SVector::<f64, 6>::repeat(1e200),
+                SMatrix::<f64, 6, 6>::identity(),
+            ),
+            (SVector::zeros(), SMatrix::zeros()),
+        ] {
+            let absurd = JumpMemory::<f64, MAX_NODES>::new();
+            for guide in 0..jumps {
+                absurd.keep(guide, 1.0, &wrench, &matrix.lu(), false);
+            }
+            same(&tau, &x, &absurd);
+            assert_eq!(absurd.recalled(), 0);
         }
     }
 

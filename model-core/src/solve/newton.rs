@@ -316,3 +316,102 @@ where
     };
     (residual, termination)
 }
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector3;
+
+    use super::*;
+    use crate::loads::TipLoad;
+    use crate::ode::tendon::TendonRod;
+    use crate::shooting::ShootingSettings;
+    use crate::tendon::{MAX_TENDONS, Tendons};
+
+    /// Each exit of the chord steps, on the tendon scene from 0.1 % or 1 % off its answer with a
+    /// Jacobian `J` taken at the answer: with `J` they converge (each step one plain sweep and one
+    /// iteration); a step beyond the trust region (`J / 1e9`) is refused before its sweep and
+    /// leaves the start; a trial that does not lower the residual (`-J`) is swept and left; a step
+    /// that lowers it less than fourfold (`2 J`: by half) is kept and ends them; steps that lower it
+    /// enough but slowly (`1.2 J`: sixfold) stop after `CHORD_STEPS`; and they leave the solve at
+    /// least one iteration.
+    #[test]
+    fn chord_steps_take_only_steps_that_contract() {
+        let (model, tendons) = crate::ode::tendon::tests::scene();
+        let set = Tendons::new(&model, &tendons).unwrap();
+        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+        let settings = ShootingSettings::default();
+        let tau = [2.0, 1.2];
+        let solved = model
+            .solve_tendons(&set, &tau, &load, None, &settings)
+            .unwrap();
+        assert!(solved.is_success());
+        let mut all = [0.0; MAX_TENDONS];
+        all[..2].copy_from_slice(&tau);
+        let ode = TendonRod::new(&model, &set, &all, &load, 1.0);
+        let eq = &solved.equilibrium;
+        let answer = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+        let j = sweep(&ode, &answer, TangentSet::unknowns(false), None).jacobian();
+        let options = NewtonOptions {
+            tolerance: settings.tolerance,
+            to_rounding: true,
+            max_step_rad: settings.max_rotation_step_rad,
+            max_iterations: 20,
+            tangents: TangentSet::unknowns(false),
+            plain_first: true,
+        };
+        // (jacobian, start off by, iterations allowed, converged, chord sweeps, moved)
+        let cases = [
+            (j, 1e-3, 20, true, None, true),
+            (j / 1e9, 1e-3, 20, false, Some(0), false),
+            (-j, 1e-3, 20, false, Some(1), false),
+            (j * 2.0, 1e-3, 20, false, Some(1), true),
+            (
+                j * 1.2,
+                1e-2,
+                20,
+                false,
+                Some(usize::from(CHORD_STEPS)),
+                true,
+            ),
+            (j * 1.2, 1e-2, 2, false, Some(1), true),
+        ];
+        for (k, (jacobian, off, iterations, converges, chords, moves)) in
+            cases.into_iter().enumerate()
+        {
+            let start = ode.unknowns(&(eq.base_force_n * (1.0 + off)), &eq.base_moment_nm);
+            let mut x = start;
+            let mut sw = sweep(&ode, &x, TangentSet::NONE, None);
+            let before = ode.residual_size(&sw.residual);
+            let options = NewtonOptions {
+                max_iterations: iterations,
+                ..options
+            };
+            assert!(
+                !converged(&ode, &sw, &x, &options),
+                "case {k}: the start is off"
+            );
+            let mut work = Work::default();
+            let done = chord_steps(&ode, &mut x, &mut sw, &jacobian, &options, &mut work);
+            assert_eq!(done, converges, "case {k}");
+            assert_eq!(
+                work.sweeps, work.iterations,
+                "case {k}: one plain sweep a step"
+            );
+            if let Some(chords) = chords {
+                assert_eq!(usize::from(work.sweeps), chords, "case {k}");
+            } else {
+                assert!(work.sweeps <= u16::from(CHORD_STEPS), "case {k}: {work:?}");
+            }
+            assert_eq!(x != start, moves, "case {k}");
+            // Where they stopped, `sw` is `x`'s plain sweep and no worse than the start.
+            let again = sweep(&ode, &x, TangentSet::NONE, None);
+            assert_eq!(again.residual, sw.residual, "case {k}");
+            let after = ode.residual_size(&sw.residual);
+            assert!(after <= before, "case {k}");
+            if converges {
+                let apart = (x - answer).norm() / answer.norm();
+                assert!(apart < 1e-12, "case {k}: {apart:e} from the answer");
+            }
+        }
+    }
+}

@@ -26,6 +26,7 @@ use crate::error::{ModelError, finite};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
+use crate::ode::tendon::JumpMemory;
 use crate::report::Termination;
 use crate::shooting::ShootingSettings;
 use crate::solve::stopping::default_tolerance;
@@ -147,6 +148,13 @@ const PREDICTED_BASE_MOVE: f64 = 0.05;
 /// sweep to go without tangents, when chord steps can follow it (`crate::solve::Chord`): one chord
 /// step took the firmware's state-change tick from 4.3 times the tolerance to 0.25 times it.
 const CHORD_REACH: f64 = 16.0;
+
+/// How far above the rounding floor a step must start for the base sensitivity's secant along it:
+/// from closer, the base's change is mostly the forward solves' rounding, and a secant along it
+/// spoils the predictions the next steps and the next tick start from. (The needed lengths'
+/// sensitivity keeps every secant: skipping them too took the tendon inverse's moving-load test
+/// to its iteration limit; it feeds that inverse's gradient, the base's only starts.)
+const SECANT_FLOOR: f64 = 64.0;
 
 /// Newton iterations of the forward solve a joint step starts (`joint_step.rs`): from a tracking
 /// start it converges in one or two.
@@ -411,6 +419,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // quarter of it.
         let mut chord: Option<SMatrix<T, 6, 6>> = None;
         let reach = shooting.tolerance * T::lit(CHORD_REACH);
+        // Where the guides' jumps converged in this solve's sweeps: its plain sweeps start there.
+        let memory = JumpMemory::new();
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
                 termination = current.equilibrium.report.termination;
@@ -478,7 +488,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         d_base_d_tension: &d_base,
                     };
                     let stepped = self.joint_step(
-                        tendons, load, &fb, &trial, predicted, anchor, &carried, &tracking,
+                        tendons, load, &fb, &trial, predicted, anchor, &carried, &tracking, &memory,
                     );
                     sweeps += 1; // its one sweep, whatever the outcome
                     stepped.is_some_and(|j| {
@@ -507,6 +517,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     confirm.then_some(Confirm {
                         chord: chord.as_ref().map(|jacobian| Chord { jacobian }),
                     }),
+                    Some(&memory),
                 )?;
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {
@@ -541,7 +552,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     } else if let Some(s) = sens.as_mut() {
                         secant(s, &dn, &dt);
                     }
-                    secant(&mut d_base, &(moved.base() - current.base()), &dt);
+                    // (Not along a step from within SECANT_FLOOR of the floor.)
+                    if size > floor * T::lit(SECANT_FLOOR) {
+                        secant(&mut d_base, &(moved.base() - current.base()), &dt);
+                    }
                     fresh = false;
                     tau = trial;
                     current = moved;

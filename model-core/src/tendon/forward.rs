@@ -11,7 +11,7 @@ use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::tendon::{GuideRecord, TendonRod};
+use crate::ode::tendon::{GuideRecord, JumpMemory, TendonRod};
 use crate::report::Termination;
 use crate::shape::ShapePoint;
 use crate::shooting::{Equilibrium, ShootingSettings, equilibrium, shape_of};
@@ -101,12 +101,15 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let start = start
             .filter(|s| s.is_success())
             .map(|s| (s.equilibrium.base_force_n, s.equilibrium.base_moment_nm));
-        self.solve_tendons_from(tendons, tensions_n, load, start, settings, None)
+        self.solve_tendons_from(tendons, tensions_n, load, start, settings, None, None)
     }
 
     /// [`Model::solve_tendons`] from a base force (N) and moment (N m), or cold; `confirm`: the
     /// start is expected to be the answer, its first sweep goes without tangents, then chord steps
-    /// if it brings a Jacobian (`crate::solve::solve_from`).
+    /// if it brings a Jacobian (`crate::solve::solve_from`); `memory`: where the guides' jumps
+    /// converged in earlier sweeps, for its sweeps without tangents to start from and its sweeps
+    /// to keep (`JumpMemory`).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn solve_tendons_from(
         &self,
         tendons: &Tendons<T>,
@@ -115,13 +118,17 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         start: Option<(Vector3<T>, Vector3<T>)>,
         settings: &ShootingSettings<T>,
         confirm: Option<Confirm<'_, T, 6>>,
+        memory: Option<&JumpMemory<T, NODES>>,
     ) -> Result<TendonEquilibrium<T>, ModelError> {
         tendons.check_model(self)?;
         let tau = tendons.check_tensions(tensions_n)?;
         load.validate()?;
         settings.validate()?;
         let record = GuideRecord::new();
-        let ode = TendonRod::new(self, tendons, &tau, load, T::one()).recording(&record);
+        let mut ode = TendonRod::new(self, tendons, &tau, load, T::one()).recording(&record);
+        if let Some(memory) = memory {
+            ode = ode.remembering(memory);
+        }
         let start = match start {
             Some((force_n, moment_nm)) => {
                 finite_vec(&force_n, "warm-start base force")?;
@@ -292,10 +299,10 @@ mod tests {
         let plain = Some(Confirm { chord: None });
         for (start, usual_sweeps, more) in [(at, 1, 0), (off, 4, 1)] {
             let again = model
-                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, plain)
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, plain, None)
                 .unwrap();
             let usual = model
-                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, None)
+                .solve_tendons_from(&set, &tau, &load, Some(start), &settings, None, None)
                 .unwrap();
             assert!(again.is_success(), "{:?}", again.equilibrium.report);
             assert_eq!(usual.equilibrium.report.sweeps, usual_sweeps);
@@ -338,7 +345,7 @@ mod tests {
                 }),
             });
             let again = model
-                .solve_tendons_from(&set, &tau, &load, Some(off), &settings, confirm)
+                .solve_tendons_from(&set, &tau, &load, Some(off), &settings, confirm, None)
                 .unwrap();
             assert!(again.is_success(), "{:?}", again.equilibrium.report);
             let report = &again.equilibrium.report;

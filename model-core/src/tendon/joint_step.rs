@@ -27,7 +27,7 @@ use crate::Scalar;
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::tendon::{GuideRecord, PathChanges, TendonRod};
+use crate::ode::tendon::{GuideRecord, JumpMemory, PathChanges, TendonRod};
 use crate::sweep::{TangentSet, sweep};
 
 /// Where a joint step leads: the tensions, N, and the forward solve's start there, base force (N)
@@ -84,12 +84,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         anchor: BaseWrench<T>,
         carried: &Sensitivities<'_, T>,
         tracking: &Tracking<T>,
+        memory: &JumpMemory<T, NODES>,
     ) -> Option<JointStep<T>> {
         let record = GuideRecord::new();
         let paths = PathChanges::new();
         let ode = TendonRod::new(self, tendons, tau, load, T::one())
             .recording(&record)
             .tracing_paths(&paths)
+            .remembering(memory)
             .jumping_ahead();
         let x = ode.unknowns(&start.0, &start.1);
         let sw = sweep(&ode, &x, TangentSet::unknowns(false), None);
