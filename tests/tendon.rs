@@ -530,6 +530,59 @@ fn tendon_warm_updates_match_cold_solves_in_f32() {
     tendon_warm_updates_match_cold_solves::<f32>(2e-3, 1e-5, 2, 3);
 }
 
+/// A warm update far from its previous answer still gives the cold solve's answer: tensions,
+/// states and tip. (A spool moved by several ticks' worth at once: in three of the four moves the
+/// tick's joint step declines, its own start or the update's predicted one beyond a tracking step,
+/// and the plain step and its halves take over.)
+#[test]
+fn tendon_warm_updates_after_large_moves_match_cold_solves() {
+    let (rod, mut tendons) = reference::tendon_bench::<f64>(20).unwrap();
+    for t in tendons.iter_mut() {
+        t.axial_stiffness_n = Some(14_000.0);
+        t.feed_length_m = 0.3;
+    }
+    let model = Model::<f64>::new(rod).unwrap();
+    let set = Tendons::new(&model, &tendons).unwrap();
+    let zero = TipLoad::zero();
+    let control = Default::default();
+    let start = [0.05e-3, 0.12e-3, -0.05e-3];
+    let previous = model
+        .solve_displacements(&set, &start, &zero, None, &settings(), &control)
+        .unwrap();
+    assert!(previous.is_success());
+    // Tendon 0 taken in by 0.3 and 0.6 mm (2.5 and 5 ticks of the loop's actuation, about 6 and 12
+    // N more); tendon 1 paid out to slack; tendon 2 taken in from slack.
+    for moved in [
+        [0.3e-3, 0.0, 0.0],
+        [0.6e-3, 0.0, 0.0],
+        [0.0, -0.5e-3, 0.0],
+        [0.2e-3, -0.3e-3, 0.4e-3],
+    ] {
+        let d: Vec<f64> = start.iter().zip(moved).map(|(a, b)| a + b).collect();
+        let warm = model
+            .update_displacements(&set, &d, &zero, &previous, &settings(), &control)
+            .unwrap();
+        let cold = model
+            .solve_displacements(&set, &d, &zero, None, &settings(), &control)
+            .unwrap();
+        assert!(
+            warm.is_success() && cold.is_success(),
+            "{moved:?}: warm {:?} {:?}, cold {:?} {:?}",
+            warm.termination,
+            warm.solved.equilibrium.report.termination,
+            cold.termination,
+            cold.solved.equilibrium.report.termination
+        );
+        assert_eq!(warm.states, cold.states, "{moved:?}");
+        for (a, b) in warm.solved.tensions_n.iter().zip(&cold.solved.tensions_n) {
+            assert!((a - b).abs() < 1e-8, "{moved:?}: {a} vs {b} N");
+        }
+        let tip = (warm.solved.equilibrium.tip_position_m - cold.solved.equilibrium.tip_position_m)
+            .norm();
+        assert!(tip < 1e-9, "{moved:?}: tips {tip:e} m apart");
+    }
+}
+
 /// A tendon paid out beyond its path goes slack: zero tension, never negative, and its slack is
 /// what was paid out beyond the path of the taut solution.
 #[test]
