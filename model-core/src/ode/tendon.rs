@@ -178,12 +178,12 @@ impl<T: Scalar> GuideRecord<T> {
 }
 
 /// Where each guide's implicit jump converged in the sweeps so far, and the Newton matrix
-/// `I + W_next Psi` of its last Newton pass, factored: a sweep without tangents near them (a control loop's
-/// confirming and chord sweeps, a tick after the one before) starts each jump there and takes
-/// chord steps on that matrix, a look-ahead of the state alone each, instead of a Newton pass that
-/// carries the six directions of `(n, m)` through the segment (MODEL.md §6.5). Lent to the
-/// equations of several forward solves ([`TendonRod::remembering`]); sized by the plan's nodes,
-/// as every guide is one.
+/// `I + W_next Psi` of its last Newton pass, factored: a sweep without tangents near them (a
+/// displacement solve's confirming and chord sweeps) starts each jump there and takes chord steps
+/// on that matrix, a look-ahead of the state alone each, instead of a Newton pass that carries
+/// the six directions of `(n, m)` through the segment (MODEL.md §6.5). Lent to the equations of
+/// one displacement solve's forward solves and joint step ([`TendonRod::remembering`]); sized by
+/// the plan's nodes, as every guide is one.
 #[derive(Debug)]
 pub(crate) struct JumpMemory<T: Scalar, const NODES: usize> {
     jumps: [Cell<Option<Remembered<T>>>; NODES],
@@ -489,6 +489,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         guide: usize,
         y: &mut State<T, A>,
         tangents: &mut [Tangent<T>],
+        remember: bool,
     ) -> bool {
         let length = self.model.length_m();
         let zero = PoseDelta::zero();
@@ -532,18 +533,20 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
         let mut last_newton: Option<T> = None;
         let mut contraction: Option<T> = None;
         let mut all = [force_state::Tangent::zero(); 2 * MAX_TANGENTS];
-        // The last Newton pass's `W_next`, `Psi` and `I + W_next Psi` factored, and whether the
-        // next pass may reuse them (a chord step; only ever set after a Newton pass).
+        // The last Newton pass's `W_next`, `Psi` and `I + W_next Psi` factored (or the remembered
+        // factors), and whether the next pass may reuse them (a chord step).
         let mut lin = Linearised::blank();
         let mut chord_next = false;
         let mut chord_spent = false;
         // A sweep without tangents starts where this guide's jump converged before and takes chord
         // steps on that jump's Newton matrix (`JumpMemory`). The first has no contraction to show
-        // and is taken; the next shows it. Until a Newton pass, a step that is not finite (a
-        // look-ahead that was not) starts the jump again straight ahead, as without a memory.
+        // and is taken unless it is larger than the jump's own scale; the next must halve it, and
+        // so on. Until a Newton pass, a step that is not finite, too large or refused leaves the
+        // memory: the jump starts again straight ahead with all its passes, exactly as without
+        // one (`retreat`).
         let remembered = self
             .memory
-            .filter(|_| count == 0)
+            .filter(|_| count == 0 && remember)
             .and_then(|memory| memory.recall(guide, self.scale(), &mut lin.lu));
         let mut first_remembered = false;
         let mut retreat = false;
@@ -611,13 +614,23 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> TendonRod<'a, T, A, NODE
                 (retreat, linearised) = (false, true);
             }
             let step = lin.lu.solve(&(-g)).filter(crate::scalar::all_finite);
+            // (Only chord steps on the remembered factors while `retreat` holds.)
+            let left = retreat
+                && step.as_ref().map(SVector::norm).is_none_or(|size| {
+                    if first_remembered {
+                        size > scale
+                    } else {
+                        !last_step.is_some_and(|p| p > T::zero() && size <= p * T::lit(0.5))
+                    }
+                });
+            if left {
+                (n, m) = straight;
+                (chord_next, chord_spent, first_remembered, retreat) = (false, false, false, false);
+                (last_step, last_newton, contraction) = (None, None, None);
+                (pass, passes) = (0, MAX_JUMP_ITERATIONS);
+                continue;
+            }
             let Some(step) = step else {
-                if core::mem::take(&mut retreat) {
-                    (n, m) = straight;
-                    (chord_next, chord_spent, first_remembered) = (false, true, false);
-                    last_step = None;
-                    continue;
-                }
                 return false;
             };
             let (dn, dm) = split(&step);
@@ -1067,7 +1080,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         if reads_next(&self.tendons.routed, &y.chord_n, guide) {
             let grid = self.rod.grid();
             let index = grid.nodes.iter().position(|n| n.guide == node.guide);
-            let solved = index.is_some_and(|index| self.implicit_jump(index, guide, y, tangents));
+            // A jump that started from the memory and failed is solved again without it (a failed
+            // jump leaves the state as it was).
+            let solved = index.is_some_and(|index| {
+                self.implicit_jump(index, guide, y, tangents, true)
+                    || (tangents.is_empty()
+                        && self.memory.is_some()
+                        && self.implicit_jump(index, guide, y, tangents, false))
+            });
             if !solved {
                 // No consistent jump: the sweep reports a non-finite result, never a wrong one.
                 y.rod.n = Vector3::repeat(T::lit(f64::NAN));
@@ -1324,10 +1344,10 @@ pub(crate) mod tests {
         for (t, dx) in [([3.0, 0.5], 0.1), ([0.5, 3.0], -0.1), ([8.0, 4.0], 0.05)] {
             same(&tension(t), &x.map(|v| v * (1.0 + dx)), &memory);
         }
-        // A memory kept at another load scale is not read.
+        // A memory kept at another load scale is not read, however close.
         let other = JumpMemory::new();
-        let half = TendonRod::new(&model, &tendons, &tau, &load, 0.5).remembering(&other);
-        assert!(sweep(&half, &(x * 0.5), TangentSet::unknowns(false), None).finite);
+        let near = TendonRod::new(&model, &tendons, &tau, &load, 1.0 - 1e-9).remembering(&other);
+        assert!(sweep(&near, &x, TangentSet::unknowns(false), None).finite);
         same(&tau, &x, &other);
         assert_eq!(other.recalled(), 0);
         // An absurd memory is left for the straight-ahead start: a wrench no look-ahead survives,
@@ -1346,6 +1366,68 @@ pub(crate) mod tests {
             same(&tau, &x, &absurd);
             assert_eq!(absurd.recalled(), 0);
         }
+    }
+
+    /// A memory kept far from where it is read (a sweep at other tensions, 0 to 40 N, and at other
+    /// unknowns, the straight rod's guess scaled by -0.5 to 2, with and without capstan friction)
+    /// does not change a plain sweep: it is finite where the sweep without the memory is, and
+    /// agrees with it to rounding. (A chord step on another state's factors that is too large or
+    /// does not contract leaves the memory, and the jump starts again as without one; a jump that
+    /// fails from the memory is solved again without it.) Before those two rules, a jump started
+    /// from a far memory reported converged with its condition 1e18 times its tolerance off: a
+    /// sweep here was 257 times its residual's size off.
+    #[test]
+    fn tendon_far_memories_do_not_change_the_sweep() {
+        use crate::tendon::Sliding;
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        let (mut checked, mut finite) = (0, 0);
+        for mu in [0.0, 0.3] {
+            let (model, mut tendons) = scene();
+            for t in tendons.iter_mut() {
+                t.friction_coefficient = mu;
+            }
+            let mut tendons = Tendons::new(&model, &tendons).unwrap();
+            tendons.set_sliding(0, Sliding::In);
+            tendons.set_sliding(1, Sliding::Out);
+            let mut states = Vec::new();
+            for tau in [0.0, 2.0, 10.0, 40.0] {
+                let mut full = [0.0; MAX_TENDONS];
+                full[..2].copy_from_slice(&[tau, 0.3 * tau]);
+                let guess = TendonRod::new(&model, &tendons, &full, &load, 1.0).guess();
+                for scale in [-0.5, 0.0, 0.5, 1.0, 2.0] {
+                    states.push((full, guess * scale));
+                }
+            }
+            for (kept_tau, kept_x) in &states {
+                let memory = JumpMemory::new();
+                let keeping =
+                    TendonRod::new(&model, &tendons, kept_tau, &load, 1.0).remembering(&memory);
+                if !sweep(&keeping, kept_x, TangentSet::NONE, None).finite {
+                    continue;
+                }
+                for (tau, x) in &states {
+                    let plain = TendonRod::new(&model, &tendons, tau, &load, 1.0);
+                    let without = sweep(&plain, x, TangentSet::NONE, None);
+                    // (The memory is kept afresh by each read: the next read starts from it.)
+                    let with = sweep(&plain.remembering(&memory), x, TangentSet::NONE, None);
+                    let case = format!(
+                        "mu {mu}: kept at {:?} {kept_x:?}, read at {:?} {x:?}",
+                        &kept_tau[..2],
+                        &tau[..2]
+                    );
+                    checked += 1;
+                    assert_eq!(with.finite, without.finite, "{case}");
+                    if !without.finite {
+                        continue;
+                    }
+                    finite += 1;
+                    let size = without.residual.norm().max(model.moment_scale_nm());
+                    let off = (with.residual - without.residual).norm() / size;
+                    assert!(off < 1e-9, "{case}: {off:e}");
+                }
+            }
+        }
+        assert!(finite > checked / 2, "{finite} of {checked} finite");
     }
 
     /// A rod under gravity with four guides and two tendons, one ending mid-way.
