@@ -562,6 +562,47 @@ fn in_plane_ramp_f32_matches_f64_to_200g() {
     }
 }
 
+/// Cold solves go straight to the answer from the bent rod's guess (MODEL.md §3.12), with no load
+/// continuation, at every tip mass from 0 to 300 g on the bare rod (bends up to 80 degrees), 12
+/// and 40 steps, straight down and 60 degrees out of the plane, and under the rod's own weight
+/// alone on rods 0.39 to 1.5 m long: at most five sweeps each, verified and on the branch of their
+/// neighbours (`ramp`: each equals a warm start from the last). From the straight rod's guess capped
+/// at 2.5 rad, 100 g and more took the continuation (47-63 sweeps at 12 steps), as did the 1.5 m rod.
+#[test]
+fn heavy_loads_converge_directly_from_the_bent_rods_guess() {
+    let mut worst = 0;
+    let mut direct = |what: &str, eq: &Equilibrium<f64>| {
+        assert_eq!(eq.report.load_steps, 0, "{what}: continued");
+        assert!(eq.report.sweeps <= 5, "{what}: {} sweeps", eq.report.sweeps);
+        worst = worst.max(eq.report.sweeps);
+    };
+    for steps in [12, 40] {
+        let model: Model<f64> = build(bare_rod(L, reference::YOUNGS_MODULUS_PA, steps, true));
+        for deg in [0.0, 60.0] {
+            let loads: Vec<TipLoad<f64>> = (0..=30)
+                .map(|k| {
+                    let f = 0.01 * k as f64 * G;
+                    let (s, c) = f64::to_radians(deg).sin_cos();
+                    TipLoad::force(Vector3::new(0.0, -f * c, f * s))
+                })
+                .collect();
+            let what = format!("bare rod, {steps} steps, {deg} deg");
+            ramp(&what, &model, &loads);
+            for (k, load) in loads.iter().enumerate() {
+                direct(&format!("{what}, {k}0 g"), &cold(&model, load));
+            }
+        }
+    }
+    for length in [0.39, 0.6, 0.8, 1.0, 1.2, 1.5] {
+        let model: Model<f64> = build(bare_rod(length, reference::YOUNGS_MODULUS_PA, 60, true));
+        let what = format!("{length} m rod under its weight");
+        let eq = cold(&model, &weight(0.0));
+        verified(&what, &model, &eq);
+        direct(&what, &eq);
+    }
+    println!("most sweeps of a cold solve: {worst}");
+}
+
 /// Out of the plane: 0 to 832 g sideways (+z) and obliquely (-0.6 y + 0.8 z), verified and
 /// continuous; the sideways tip swings out to within 5 % of the rod's length of straight sideways.
 #[test]
@@ -1658,8 +1699,8 @@ fn frame_drift_per_representation() {
 /// meets the contract up to lambda = 9);
 /// the f32 sweep at the exact root stays within 0.1 mm of f64 up to lambda = 10 (before the stopping
 /// rule watched the tip, f32 stopped early from lambda 7, up to 2.2 mm off). `--nocapture` prints the table of
-/// report/f32_limits.md (lambda 11 to 14 included, unasserted: both fail from 12 within the default
-/// 64 load steps).
+/// report/f32_limits.md (lambda 11 to 14 included, unasserted: both converge to 12 from the bent
+/// rod's guess and fail at 14 within the default 64 load steps).
 #[test]
 fn shooting_reach_in_lambda() {
     let m64: Model<f64> = build(bare_rod(L, reference::YOUNGS_MODULUS_PA, 200, false));

@@ -112,7 +112,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
     }
 
     /// The equilibrium under `load`, by the 3D solve's strategy and solver: Newton on `k(0)` from the
-    /// capped small-deflection guess, and if that fails or lands on an unstable equilibrium, load
+    /// bent rod's guess (MODEL.md §3.12), and if that fails or lands on an unstable equilibrium, load
     /// continuation from the unloaded rod. The answer is an [`Equilibrium`] like the 3D solve's; a
     /// failure is reported, not hidden.
     ///

@@ -29,7 +29,7 @@ use crate::{MAX_CABLES, Scalar};
 /// Where a solve starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Start<T> {
-    /// From nothing: small-deflection guess, then load continuation if needed.
+    /// From nothing: the bent rod's guess (MODEL.md §3.12), then load continuation if needed.
     Cold,
     /// From a previous base strain, 1/m (the cheap path when loads change a little).
     Warm(Vector3<T>),

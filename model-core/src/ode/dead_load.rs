@@ -13,7 +13,8 @@
 
 use nalgebra::{Matrix3, SVector, Vector3};
 
-use super::{Family, Linear, Pose, RodOde, straight_base_moment, unit};
+use super::guess::base_strain;
+use super::{Family, Linear, Pose, RodOde, unit};
 use crate::Scalar;
 use crate::constitutive::Compliance;
 use crate::kinematics::Attitude;
@@ -179,12 +180,12 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 3>
 
     /// The base moment of all loads on the straight rod, `u0 = C^-1 R0^T m(0)`.
     fn guess(&self) -> SVector<T, 3> {
-        let m0 = straight_base_moment(self.model, &self.load, self.alpha);
-        let c_inv = self
-            .model
-            .base_compliance()
-            .map_or(Vector3::zeros(), |c| c.c_inv);
-        c_inv.component_mul(&self.model.rod().base_orientation.tr_mul(&m0))
+        base_strain(self.model, &self.load, self.alpha, false)
+    }
+
+    /// The same with the forces' lever arms of the bent rod (`guess.rs`).
+    fn cold_guess(&self) -> SVector<T, 3> {
+        base_strain(self.model, &self.load, self.alpha, true)
     }
 
     #[inline]

@@ -20,7 +20,8 @@
 use nalgebra::{Matrix3, SVector, Vector3};
 
 use super::dead_load::compensated_add;
-use super::{Family, Linear, Pose, RodOde, straight_base_moment};
+use super::guess::StraightRod;
+use super::{Family, Linear, Pose, RodOde};
 use crate::Scalar;
 use crate::constitutive::Compliance;
 use crate::kinematics::Attitude;
@@ -241,7 +242,7 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<
         let model = self.model;
         let rod = model.rod();
         let mut n0 = (self.load.force_n + model.plan().base_force_n()) * self.alpha;
-        let mut m0 = straight_base_moment(model, &self.load, self.alpha);
+        let mut m0 = StraightRod::new(model, &self.load, self.alpha).base_moment_nm();
         let tangent = rod.base_orientation.column(2).into_owned();
         let nodes = &model.plan().nodes;
         for (k, node) in nodes.iter().enumerate().skip(1) {

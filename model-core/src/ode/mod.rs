@@ -18,6 +18,7 @@
 
 pub(crate) mod dead_load;
 pub(crate) mod force_state;
+pub(crate) mod guess;
 pub(crate) mod planar;
 pub(crate) mod tendon;
 pub(crate) mod tendon_continuous;
@@ -25,9 +26,7 @@ pub(crate) mod tendon_continuous;
 use nalgebra::{Matrix3, SVector, Vector3};
 
 use crate::Scalar;
-use crate::kinematics::Attitude;
-use crate::loads::TipLoad;
-use crate::model::{Grid, Model};
+use crate::model::Grid;
 use crate::plan::{Interval, Node};
 use crate::shape::ShapePoint;
 
@@ -91,6 +90,11 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn at_scale(&self, load_scale: T) -> Self;
     /// The small-deflection guess of the unknowns at this load scale.
     fn guess(&self) -> SVector<T, K>;
+    /// A cold start's direct attempt at the full load starts here: [`RodOde::guess`] unless the
+    /// equations know the bent rod's better (`guess.rs`).
+    fn cold_guess(&self) -> SVector<T, K> {
+        self.guess()
+    }
 
     /// The state at the base for unknowns `x`.
     fn start(&self, x: &SVector<T, K>) -> Self::State;
@@ -202,29 +206,6 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn rotation_rad(&self, x: &SVector<T, K>) -> T {
         x.norm() * self.length_m()
     }
-}
-
-/// The base moment of all loads on the straight, unloaded rod at load scale `alpha`:
-/// `m(0) = tau + sum(tau_k) + t x integral(n ds)` (global), the small-deflection guess.
-pub(crate) fn straight_base_moment<T: Scalar, A: Attitude<T>, const NODES: usize>(
-    model: &Model<T, A, NODES>,
-    load: &TipLoad<T>,
-    alpha: T,
-) -> Vector3<T> {
-    let rod = model.rod();
-    let plan = model.plan();
-    let tangent = rod.base_orientation.column(2).into_owned();
-    let g = rod.gravity_m_s2;
-    let half = T::lit(0.5);
-    let mut force_integral = Vector3::zeros();
-    let mut moments = load.moment_nm;
-    for (interval, node) in plan.intervals.iter().zip(plan.nodes.iter().skip(1)) {
-        let len = interval.s1_m - interval.s0_m;
-        force_integral += (load.force_n + interval.distal_force_n) * len
-            + g * (interval.line_density_kg_per_m * len * len * half);
-        moments += node.moment_nm;
-    }
-    (moments + tangent.cross(&force_integral)) * alpha
 }
 
 /// `e_j`, the `j`-th unit vector.

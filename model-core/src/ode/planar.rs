@@ -17,7 +17,8 @@
 use nalgebra::{Matrix3, SVector, Vector2, Vector3};
 
 use super::dead_load::compensated_add;
-use super::{Family, Linear, Pose, RodOde, straight_base_moment};
+use super::guess::base_strain;
+use super::{Family, Linear, Pose, RodOde};
 use crate::Scalar;
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
@@ -227,12 +228,13 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
 
     /// The 3D small-deflection base strain about the normal.
     fn guess(&self) -> SVector<T, 1> {
-        let m0 = straight_base_moment(self.model, &self.load, self.alpha);
-        let c_inv = self
-            .model
-            .base_compliance()
-            .map_or(Vector3::zeros(), |c| c.c_inv);
-        let u0 = c_inv.component_mul(&self.model.rod().base_orientation.tr_mul(&m0));
+        let u0 = base_strain(self.model, &self.load, self.alpha, false);
+        SVector::<T, 1>::new(u0.dot(&self.local_normal))
+    }
+
+    /// The bent rod's base strain about the normal (`guess.rs`).
+    fn cold_guess(&self) -> SVector<T, 1> {
+        let u0 = base_strain(self.model, &self.load, self.alpha, true);
         SVector::<T, 1>::new(u0.dot(&self.local_normal))
     }
 

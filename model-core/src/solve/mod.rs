@@ -1,6 +1,6 @@
 //! Solving any rod equations for their `K` shooting unknowns: one damped Newton/LM (`newton.rs`), one
 //! load continuation (`continuation.rs`), the stopping rules (`stopping.rs`) and the strategy of a
-//! solve (here): a cold start first tries Newton from the small-deflection guess and keeps the answer
+//! solve (here): a cold start first tries Newton from the bent rod's guess and keeps the answer
 //! only if the stability test passes; otherwise it ramps all loads from zero, which follows the branch
 //! connected to the unloaded rod. A converged but unstable equilibrium is reported as
 //! [`Termination::Unstable`], never as success. Equations without a stability test go straight to
@@ -61,8 +61,8 @@ impl<T: Scalar> ShootingSettings<T> {
     }
 }
 
-/// A cold start's first guess is the small-deflection one with its base rotation `|x| L` capped at
-/// this angle, rad (the true rotation grows more slowly than the linear estimate).
+/// A cold start's load continuation first bends the linear rod by about this angle, rad (its first
+/// load step is this over the small-deflection guess's base rotation `|x| L`, at most a half).
 const GUESS_ANGLE_RAD: f64 = 2.5;
 
 /// Newton iterations a cold start gives the full load before it falls back to continuation.
@@ -147,12 +147,11 @@ where
     let mut load_steps = 0u16;
     let length = ode.length_m();
 
-    // A cold start tries the full load from the capped small-deflection guess; if that fails, load
-    // continuation starts with a step that bends the linear rod by about the same angle.
+    // A cold start tries the full load from the bent rod's guess ([`RodOde::cold_guess`]); if that
+    // fails, load continuation starts with a step that bends the linear rod by GUESS_ANGLE_RAD.
     let (direct_start, direct_iterations, first_step) = match start {
         None => {
-            let guess = ode.guess();
-            let angle = guess.norm() * length;
+            let angle = ode.guess().norm() * length;
             let limit = T::lit(GUESS_ANGLE_RAD);
             let scale = if angle > limit {
                 limit / angle
@@ -160,7 +159,7 @@ where
                 T::one()
             };
             (
-                guess * scale,
+                ode.cold_guess(),
                 settings.max_iterations.min(DIRECT_ITERATIONS),
                 scale.min(T::lit(0.5)),
             )
