@@ -117,6 +117,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         self.compliances.get(usize::from(section))
     }
 
+    /// Whether every section's bending stiffness is the same about both axes.
+    pub(crate) fn bends_alike_about_both_axes(&self) -> bool {
+        self.compliances.iter().all(|c| c.c.x == c.c.y)
+    }
+
     /// The compliance of the first section (the base's).
     pub(crate) fn base_compliance(&self) -> Option<&Compliance<T>> {
         self.compliances.first()

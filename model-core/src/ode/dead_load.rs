@@ -409,6 +409,10 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 3>
         self.model.conservative(&self.load.moment_nm)
     }
 
+    fn bends_alike_about_both_axes(&self) -> bool {
+        self.model.bends_alike_about_both_axes()
+    }
+
     fn track(&self) -> ConjugateTrack<T> {
         ConjugateTrack::new()
     }

@@ -17,9 +17,15 @@ pub(crate) struct StraightRod<T> {
     /// The moment of every force (tip, point and weight) about the base, N m:
     /// `t0 x integral_0^L n ds`.
     pub force_moment_nm: Vector3<T>,
-    /// The force at the base, N: all of them.
-    pub base_force_n: Vector3<T>,
+    /// How hard the loads pull the rod off its base tangent `t0`, N: `|n0| (1 - cos psi) =
+    /// |n0| - t0 . n0`, `n0` the force at the base (all of them), `psi` its angle from `t0`.
+    pub pull_off_tangent_n: T,
 }
+
+/// A cold start's guess of the equations without a better one is the straight rod's, its base
+/// rotation `|x| L` capped at this angle, rad; the load continuation's first step bends the linear
+/// rod by about as much.
+pub(crate) const GUESS_ANGLE_RAD: f64 = 2.5;
 
 impl<T: Scalar> StraightRod<T> {
     pub fn new<A: Attitude<T>, const NODES: usize>(
@@ -40,10 +46,11 @@ impl<T: Scalar> StraightRod<T> {
                 + g * (interval.line_density_kg_per_m * len * len * half);
             moments += node.moment_nm;
         }
+        let base_force_n = (load.force_n + plan.base_force_n()) * alpha;
         Self {
             moments_nm: moments * alpha,
             force_moment_nm: tangent.cross(&force_integral) * alpha,
-            base_force_n: (load.force_n + plan.base_force_n()) * alpha,
+            pull_off_tangent_n: (base_force_n.norm() - tangent.dot(&base_force_n)).max(T::zero()),
         }
     }
 
@@ -54,14 +61,19 @@ impl<T: Scalar> StraightRod<T> {
 
     /// The base moment of the rod bent by its loads, for the direct attempt at the full load: the
     /// forces' moment scaled by `(1 + (theta / b)^2)^(-1/4)`, where `theta` is the base rotation
-    /// `|u0| L` it gives the straight rod and `b = 2 |n(0)| L / |m_F|`.
+    /// `|u0| L` it gives the straight rod and `b = 2 |n0| (1 - cos psi) L / |m_F|` (`n0` the force at
+    /// the base, `psi` its angle from the base tangent).
     ///
     /// Small loads bend the rod by `theta`, less a correction of second order (the lever arms
-    /// shorten by the square of the deflection). Large ones hang it along their resultant: the bend
-    /// gathers near the clamp, where the elastica's first integral `EI k^2 / 2 = |n(0)| (1 - cos)`
-    /// over a quarter turn gives `m(0) = sqrt(2 EI |n(0)|)`, i.e. `|u0| L = sqrt(b theta)` (`b = 2`
-    /// for a tip force, 4 for the rod's own weight). The scaling has both limits. Moments of fixed
-    /// direction bend the rod into a circle whatever their size and keep their linear share.
+    /// shorten by the square of the deflection; the scaling's `theta^2 / 4 b^2` is that order, not
+    /// its exact coefficient). Large ones hang it along their resultant: the bend gathers near the
+    /// clamp, where the elastica's first integral `EI k^2 / 2 = |n0| (1 - cos phi)`, from the base
+    /// tangent at `psi` to the force to the hanging rod along it, gives
+    /// `m(0) = sqrt(2 EI |n0| (1 - cos psi))`, i.e. `|u0| L = sqrt(b theta)` (for a force across the
+    /// rod `b = 2` at the tip, 4 for the rod's own weight or a force at mid-length). The scaling has
+    /// both limits. Moments of fixed direction bend the rod into a circle whatever their size and
+    /// keep their linear share, as do couples of forces (no resultant). Where the scaling is not
+    /// finite (forces beyond any rod's), the straight rod's moment.
     /// `compliance` is the base section's bending compliance `C^-1` (body frame).
     pub fn bent_base_moment_nm(
         &self,
@@ -71,14 +83,19 @@ impl<T: Scalar> StraightRod<T> {
     ) -> Vector3<T> {
         let m_f = self.force_moment_nm;
         let theta = compliance.component_mul(&orientation.tr_mul(&m_f)).norm() * length_m;
-        let hang = T::lit(2.0) * self.base_force_n.norm() * length_m;
+        let hang = T::lit(2.0) * self.pull_off_tangent_n * length_m;
         // theta / b; a couple (forces with no resultant) bends like a moment.
         let ratio = if hang > T::zero() {
             theta * m_f.norm() / hang
         } else {
             T::zero()
         };
-        self.moments_nm + m_f / (T::one() + ratio * ratio).sqrt().sqrt()
+        let scale = T::one() / (T::one() + ratio * ratio).sqrt().sqrt();
+        if scale.is_finite() {
+            self.moments_nm + m_f * scale
+        } else {
+            self.base_moment_nm()
+        }
     }
 }
 
@@ -200,6 +217,35 @@ mod tests {
             assert!(
                 (bent - linear).abs() <= 1e-12 * linear,
                 "{what}: {bent} {linear}"
+            );
+        }
+    }
+
+    /// Where the rod hangs along its load, the guess meets the solved answer whatever the force's
+    /// angle `psi` from the base tangent (the `1 - cos psi` of the first integral): 1 kg at the tip
+    /// of the weightless rod (200 steps) from 30 to 135 degrees, within 0.5 % (measured: 0.2 % at
+    /// most); without that factor it would be 1.85 times the answer at 45 degrees.
+    #[test]
+    fn the_bent_guess_meets_the_hanging_rod_at_any_angle() {
+        let mut model = rod(0.0, &[]);
+        let mut bare = model.rod().clone();
+        if let Some(section) = bare.sections.first_mut() {
+            section.steps = 200;
+        }
+        model = Model::new(bare).unwrap();
+        for psi in [30.0f64, 45.0, 90.0, 135.0] {
+            let (s, c) = psi.to_radians().sin_cos();
+            let load = TipLoad::force(Vector3::new(c, -s, 0.0) * 9.81);
+            let eq = model
+                .solve(&load, Start::Cold, &ShootingSettings::default())
+                .unwrap();
+            assert!(eq.report.termination.is_success(), "{psi} deg");
+            let answer = eq.base_strain_per_m.norm() * L;
+            let (linear, bent) = angles(&model, &load);
+            assert!(linear > 3.0 * answer, "{psi} deg: {linear} {answer}");
+            assert!(
+                (bent / answer - 1.0).abs() < 5e-3,
+                "{psi} deg: {bent} {answer}"
             );
         }
     }

@@ -90,10 +90,26 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn at_scale(&self, load_scale: T) -> Self;
     /// The small-deflection guess of the unknowns at this load scale.
     fn guess(&self) -> SVector<T, K>;
-    /// A cold start's direct attempt at the full load starts here: [`RodOde::guess`] unless the
-    /// equations know the bent rod's better (`guess.rs`).
+    /// A cold start's direct attempt at the full load starts here: [`RodOde::guess`] with its base
+    /// rotation capped at [`guess::GUESS_ANGLE_RAD`], unless the equations know the bent rod's
+    /// (`guess.rs`).
     fn cold_guess(&self) -> SVector<T, K> {
-        self.guess()
+        let guess = self.guess();
+        let angle = self.rotation_rad(&guess);
+        let limit = T::lit(guess::GUESS_ANGLE_RAD);
+        if angle > limit {
+            guess * (limit / angle)
+        } else {
+            guess
+        }
+    }
+    /// Whether every section bends alike about both axes. A cold start tries the full load
+    /// directly only then: on sections stiffer about one axis a load that twists the rod can have
+    /// stable equilibria that the unloaded rod does not lead to, and a direct attempt landed on one
+    /// (30 times stiffer about one axis, rolled 30 degrees, 0.2 kg obliquely: 0.14 m from the
+    /// answer the load continuation follows, `tests/stress.rs`).
+    fn bends_alike_about_both_axes(&self) -> bool {
+        true
     }
 
     /// The state at the base for unknowns `x`.

@@ -14,6 +14,7 @@ use nalgebra::{Const, DimMin, SMatrix, SVector};
 
 use crate::Scalar;
 use crate::error::{ModelError, positive};
+use crate::ode::guess::GUESS_ANGLE_RAD;
 use crate::ode::{Family, RodOde};
 use crate::report::{MAX_FRAME_DRIFT, MAX_PHASE_PER_STEP_RAD, Termination};
 use crate::scalar::from_columns;
@@ -60,10 +61,6 @@ impl<T: Scalar> ShootingSettings<T> {
         positive(self.max_rotation_step_rad, "trust region").map(|_| ())
     }
 }
-
-/// A cold start's load continuation first bends the linear rod by about this angle, rad (its first
-/// load step is this over the small-deflection guess's base rotation `|x| L`, at most a half).
-const GUESS_ANGLE_RAD: f64 = 2.5;
 
 /// Newton iterations a cold start gives the full load before it falls back to continuation.
 const DIRECT_ITERATIONS: u16 = 12;
@@ -148,7 +145,8 @@ where
     let length = ode.length_m();
 
     // A cold start tries the full load from the bent rod's guess ([`RodOde::cold_guess`]); if that
-    // fails, load continuation starts with a step that bends the linear rod by GUESS_ANGLE_RAD.
+    // fails, load continuation starts with a step that bends the linear rod by GUESS_ANGLE_RAD
+    // (at most half the load).
     let (direct_start, direct_iterations, first_step) = match start {
         None => {
             let angle = ode.guess().norm() * length;
@@ -181,7 +179,11 @@ where
     // right one: a cold start then follows the branch from the unloaded rod. So with no test, with
     // the test switched off, and with a moment of fixed direction (not conservative: the energy test
     // does not apply, and a direct answer 1.57 rod lengths from the loaded-from-zero one passed).
-    let testable = ode.has_stability_test() && ode.conservative() && settings.check_stability;
+    // Nor on sections stiffer about one axis than the other ([`RodOde::bends_alike_about_both_axes`]).
+    let testable = ode.has_stability_test()
+        && ode.conservative()
+        && settings.check_stability
+        && ode.bends_alike_about_both_axes();
     let direct = start.is_some() || testable;
     let mut result = direct.then(|| {
         let options = NewtonOptions {
