@@ -27,6 +27,16 @@ pub(crate) struct StraightRod<T> {
 /// rod by about as much.
 pub(crate) const GUESS_ANGLE_RAD: f64 = 2.5;
 
+/// The factor that brings a base rotation of `angle_rad` down to [`GUESS_ANGLE_RAD`] (one below it).
+pub(crate) fn cap<T: Scalar>(angle_rad: T) -> T {
+    let limit = T::lit(GUESS_ANGLE_RAD);
+    if angle_rad > limit {
+        limit / angle_rad
+    } else {
+        T::one()
+    }
+}
+
 impl<T: Scalar> StraightRod<T> {
     pub fn new<A: Attitude<T>, const NODES: usize>(
         model: &Model<T, A, NODES>,

@@ -95,13 +95,7 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     /// (`guess.rs`).
     fn cold_guess(&self) -> SVector<T, K> {
         let guess = self.guess();
-        let angle = self.rotation_rad(&guess);
-        let limit = T::lit(guess::GUESS_ANGLE_RAD);
-        if angle > limit {
-            guess * (limit / angle)
-        } else {
-            guess
-        }
+        guess * guess::cap(self.rotation_rad(&guess))
     }
     /// Whether every section bends alike about both axes. A cold start tries the full load
     /// directly only then: on sections stiffer about one axis a load that twists the rod can have

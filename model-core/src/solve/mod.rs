@@ -14,7 +14,7 @@ use nalgebra::{Const, DimMin, SMatrix, SVector};
 
 use crate::Scalar;
 use crate::error::{ModelError, positive};
-use crate::ode::guess::GUESS_ANGLE_RAD;
+use crate::ode::guess::cap;
 use crate::ode::{Family, RodOde};
 use crate::report::{MAX_FRAME_DRIFT, MAX_PHASE_PER_STEP_RAD, Termination};
 use crate::scalar::from_columns;
@@ -147,22 +147,12 @@ where
     // A cold start tries the full load from the bent rod's guess ([`RodOde::cold_guess`]); if that
     // fails, load continuation starts with a step that bends the linear rod by GUESS_ANGLE_RAD
     // (at most half the load).
-    let (direct_start, direct_iterations, first_step) = match start {
-        None => {
-            let angle = ode.guess().norm() * length;
-            let limit = T::lit(GUESS_ANGLE_RAD);
-            let scale = if angle > limit {
-                limit / angle
-            } else {
-                T::one()
-            };
-            (
-                ode.cold_guess(),
-                settings.max_iterations.min(DIRECT_ITERATIONS),
-                scale.min(T::lit(0.5)),
-            )
-        }
-        Some(x) => (x, settings.max_iterations, T::lit(0.25)),
+    let (direct_iterations, first_step) = match start {
+        None => (
+            settings.max_iterations.min(DIRECT_ITERATIONS),
+            cap(ode.guess().norm() * length).min(T::lit(0.5)),
+        ),
+        Some(_) => (settings.max_iterations, T::lit(0.25)),
     };
     let check = |out: &mut Newton<T, K>| {
         if out.termination.is_success() && settings.check_stability {
@@ -195,6 +185,7 @@ where
             plain_first: confirm.is_some() && start.is_some() && !ode.has_stability_test(),
         };
         let chord = confirm.and_then(|c| c.chord);
+        let direct_start = start.unwrap_or_else(|| ode.cold_guess());
         let mut out = newton(ode, direct_start, None, chord, &options, &mut work);
         let stability = check(&mut out);
         (out, stability)
