@@ -22,8 +22,8 @@ use model_core::inverse::{
 use model_core::planar::PlanarModel;
 use model_core::{
     Attitude, CrossSection, Equilibrium, GuideMass, LieGroup, Material, Model, ModelError,
-    PointLoad, Quaternion, Rod, RotationMatrix, Scalar, Section, ShapePoint, ShootingSettings,
-    Stability, Start, Stiffness, Termination, TipLoad,
+    Neighbour, PointLoad, Quaternion, Rod, RotationMatrix, Scalar, Section, ShapePoint,
+    ShootingSettings, Stability, Start, Stiffness, Termination, TipLoad,
 };
 use nalgebra::{Vector1, Vector3};
 
@@ -438,25 +438,35 @@ fn ramp<T: Scalar, A: Attitude<T>>(
     loads: &[TipLoad<T>],
 ) -> Vec<Vector3<f64>> {
     let mut tips = Vec::new();
-    let mut previous: Option<Vector3<T>> = None;
+    let mut previous: Option<Equilibrium<T>> = None;
     for (k, load) in loads.iter().enumerate() {
         let eq = cold(model, load);
         verified(&format!("{what} #{k}"), model, &eq);
-        if let Some(u) = previous {
-            let warm = model
-                .solve(load, Start::Warm(u), &ShootingSettings::default())
-                .expect("valid input");
-            verified(&format!("{what} #{k} warm"), model, &warm);
-            let gap = f64s(&(warm.tip_position_m - eq.tip_position_m)).norm();
-            // Two solves of one equilibrium: they differ by the residual tolerance times L.
-            let limit = if is_f64::<T>() { 1e-7 } else { 2e-4 };
+        if let Some(previous) = &previous {
             assert!(
-                gap <= limit,
-                "{what} #{k}: warm and cold tips {gap:e} m apart"
+                matches!(previous.next_start(), Start::Neighbour(_)),
+                "{what} #{k}: a cold answer carries its Jacobian"
             );
+            // From the base strain, and from the neighbour (secant steps on plain sweeps).
+            for (how, start) in [
+                ("warm", Start::Warm(previous.base_strain_per_m)),
+                ("neighbour", previous.next_start()),
+            ] {
+                let warm = model
+                    .solve(load, start, &ShootingSettings::default())
+                    .expect("valid input");
+                verified(&format!("{what} #{k} {how}"), model, &warm);
+                let gap = f64s(&(warm.tip_position_m - eq.tip_position_m)).norm();
+                // Two solves of one equilibrium: they differ by the residual tolerance times L.
+                let limit = if is_f64::<T>() { 1e-7 } else { 2e-4 };
+                assert!(
+                    gap <= limit,
+                    "{what} #{k}: {how} and cold tips {gap:e} m apart"
+                );
+            }
         }
-        previous = Some(eq.base_strain_per_m);
         tips.push(f64s(&eq.tip_position_m));
+        previous = Some(eq);
     }
     tips
 }
@@ -601,6 +611,110 @@ fn heavy_loads_converge_directly_from_the_bent_rods_guess() {
         direct(&what, &eq);
     }
     println!("most sweeps of a cold solve: {worst}");
+}
+
+/// A chain of solves, each from the last answer as a neighbour ([`Start::Neighbour`]: secant steps
+/// on plain sweeps, then one sweep with the tangents for the stability test), in 1 % load steps
+/// from 10 to 300 g, straight down and 60 degrees out of plane, at 12 and 40 steps: every answer
+/// verified, within 1e-9 m of the cold solve's, in at most 5 sweeps, and carrying its Jacobian to
+/// the next. (The warm start from the base strain alone takes 3-4 sweeps, all with the tangents.)
+#[test]
+fn a_chain_of_neighbour_starts_in_one_percent_steps() {
+    let settings = ShootingSettings::default();
+    let mut sweeps = std::collections::BTreeMap::new();
+    for steps in [12, 40] {
+        let model: Model<f64> = build(bare_rod(L, reference::YOUNGS_MODULUS_PA, steps, true));
+        for deg in [0.0, 60.0] {
+            let (s, c) = f64::to_radians(deg).sin_cos();
+            let load = |kg: f64| TipLoad::force(Vector3::new(0.0, -kg * G * c, kg * G * s));
+            let mut kg = 0.010;
+            let mut eq = cold(&model, &load(kg));
+            while kg < 0.3 {
+                kg *= 1.01;
+                let what = format!("{steps} steps, {deg} deg, {:.2} g", kg * 1e3);
+                let next = model
+                    .solve(&load(kg), eq.next_start(), &settings)
+                    .expect("valid input");
+                verified(&what, &model, &next);
+                let gap = (next.tip_position_m - cold(&model, &load(kg)).tip_position_m).norm();
+                assert!(gap <= 1e-9, "{what}: {gap:e} m from the cold answer");
+                assert_eq!(next.report.load_steps, 0, "{what}");
+                assert!(next.report.sweeps <= 6, "{what}: {:?}", next.report);
+                assert!(next.jacobian_nm2.is_some(), "{what}: no Jacobian carried");
+                *sweeps.entry(next.report.sweeps).or_insert(0) += 1;
+                eq = next;
+            }
+        }
+    }
+    println!("solves from a neighbour by sweeps: {sweeps:?}");
+}
+
+/// A neighbour start never makes a wrong answer a success. From the upside-down equilibrium of the
+/// 150 g thesis scene (with its own Jacobian), the secant steps converge there again: without the
+/// cold fallback it is reported unstable; with it, the solve goes on to the hanging answer, the cold
+/// solve's. A neighbour whose Jacobian is far off (reversed, a billion times too stiff or too soft,
+/// another load's) still reaches the cold answer (Newton takes over where the steps stop
+/// contracting), and a Jacobian that is not finite is refused as input.
+#[test]
+fn a_neighbour_start_is_tested_and_falls_back() {
+    let model = exp2::<f64>(40);
+    let load = weight::<f64>(0.150);
+    let strict = ShootingSettings {
+        cold_fallback: false,
+        ..ShootingSettings::default()
+    };
+    let upside_down = model
+        .solve(&load, Start::Warm(Vector3::new(0.0, 1.42, 0.0)), &strict)
+        .expect("valid input");
+    assert_eq!(upside_down.report.termination, Termination::Unstable);
+    let jacobian_nm2 = upside_down.jacobian_nm2.expect("its sweep's Jacobian");
+    let from_upside_down = Start::Neighbour(Neighbour {
+        base_strain_per_m: upside_down.base_strain_per_m,
+        jacobian_nm2,
+    });
+    let eq = model
+        .solve(&load, from_upside_down, &strict)
+        .expect("valid input");
+    assert!(eq.tip_position_m.y > 0.1, "reached the upside-down root");
+    assert_eq!(eq.report.termination, Termination::Unstable);
+    let hanging = cold(&model, &load);
+    verified("150 g cold", &model, &hanging);
+    let eq = model
+        .solve(&load, from_upside_down, &ShootingSettings::default())
+        .expect("valid input");
+    verified("150 g from the upside-down neighbour", &model, &eq);
+    assert!((eq.tip_position_m - hanging.tip_position_m).norm() <= 1e-9);
+
+    let lighter = cold(&model, &weight(0.148));
+    let j = lighter.jacobian_nm2.expect("a cold answer's Jacobian");
+    let other = cold(&model, &weight(0.0)).jacobian_nm2.expect("Jacobian");
+    for (what, jacobian_nm2) in [
+        ("its own", j),
+        ("reversed", -j),
+        ("too stiff", j * 1e9),
+        ("too soft", j * 1e-9),
+        ("the unloaded rod's", other),
+    ] {
+        let start = Start::Neighbour(Neighbour {
+            base_strain_per_m: lighter.base_strain_per_m,
+            jacobian_nm2,
+        });
+        let eq = model
+            .solve(&load, start, &ShootingSettings::default())
+            .expect("valid input");
+        verified(what, &model, &eq);
+        let gap = (eq.tip_position_m - hanging.tip_position_m).norm();
+        assert!(gap <= 1e-9, "{what}: {gap:e} m from the cold answer");
+        println!("{what}: {:?}", eq.report);
+    }
+    let start = Start::Neighbour(Neighbour {
+        base_strain_per_m: lighter.base_strain_per_m,
+        jacobian_nm2: j * f64::NAN,
+    });
+    assert!(matches!(
+        model.solve(&load, start, &ShootingSettings::default()),
+        Err(ModelError::NonFinite(_))
+    ));
 }
 
 /// On sections stiffer about one axis, a load that twists the rod can have stable equilibria the

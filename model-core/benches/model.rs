@@ -8,7 +8,10 @@
 //!   planar reduction;
 //! - `inverse`: a cold inverse estimate (tip force from three cable lengths) on the golden bench,
 //!   and a warm `Estimator::update` following a slowly moving tip force;
-//! - `attitude`: the cold forward solve with each frame representation.
+//! - `attitude`: the cold forward solve with each frame representation;
+//! - `start`: the forward solve of the experiment-2 scene at 40.2 g, 10 steps per section, cold,
+//!   warm from the base strain at a 1 % lighter load (`Start::Warm`), and from that answer as a
+//!   neighbour (`Start::Neighbour`: its Jacobian, secant steps on plain sweeps).
 //!
 //! Every solve is checked once before it is timed: a benchmark of a solve that does not converge
 //! would time the wrong thing. The groups are small (short warm-up and measurement) so that the whole
@@ -261,6 +264,40 @@ fn attitude<T: Scalar>(c: &mut Criterion, label: &str) {
     group.finish();
 }
 
+fn start<T: Scalar>(c: &mut Criterion, label: &str) {
+    let settings = ShootingSettings::default();
+    let model = exp2::<T, Quaternion<T>>(10);
+    let load = tip_weight::<T>();
+    let lighter = model
+        .solve(
+            &TipLoad::force(load.force_n * T::lit(0.99)),
+            Start::Cold,
+            &settings,
+        )
+        .expect("valid input");
+    converged(&lighter, "start set-up");
+    let mut group = c.benchmark_group("start");
+    configure(&mut group);
+    for (name, from) in [
+        ("cold", Start::Cold),
+        ("warm", Start::Warm(lighter.base_strain_per_m)),
+        ("neighbour", lighter.next_start()),
+    ] {
+        converged(
+            &model.solve(&load, from, &settings).expect("input"),
+            "start set-up",
+        );
+        group.bench_function(format!("{name}_{label}"), |b| {
+            b.iter(|| {
+                model
+                    .solve(black_box(&load), from, &settings)
+                    .expect("valid input")
+            })
+        });
+    }
+    group.finish();
+}
+
 fn benches(c: &mut Criterion) {
     sweep::<f64>(c, "f64");
     sweep::<f32>(c, "f32");
@@ -270,6 +307,8 @@ fn benches(c: &mut Criterion) {
     inverse::<f32>(c, "f32");
     attitude::<f64>(c, "f64");
     attitude::<f32>(c, "f32");
+    start::<f64>(c, "f64");
+    start::<f32>(c, "f32");
 }
 
 criterion_group!(all, benches);

@@ -1,12 +1,14 @@
-//! Cold forward solves of the thesis's bare rod (experiment 2's rod without guides, clamped along +x,
-//! gravity along -y) with a mass at the tip, f64, for a side-by-side timing against another
+//! Cold and warm forward solves of the thesis's bare rod (experiment 2's rod without guides, clamped
+//! along +x, gravity along -y) with a mass at the tip, f64, for a side-by-side timing against another
 //! implementation (`report/host_timings.md`).
 //!
 //! `cargo run --release -p model-core --example cold_tip_masses -- [grams ...]` prints one line per
 //! mass: the termination, sweeps, load steps, the median wall time per solve (31 batches of 50
 //! solves, the median of the batch means) and the tip. `STEPS` sets the RK4 steps (default 12),
 //! `TOLERANCE` the solver's (default `ShootingSettings::default`'s); with a tolerance, the line
-//! also gives the tip's distance from the default tolerance's answer.
+//! also gives the tip's distance from the default tolerance's answer. `WARM=1` adds two lines per
+//! mass: the solve warm from the answer at a 1 % lighter mass, from its base strain
+//! (`Start::Warm`) and from the neighbour (`Equilibrium::next_start`).
 
 use std::time::Instant;
 
@@ -41,35 +43,51 @@ fn main() -> Result<(), ModelError> {
         tolerance: env("TOLERANCE").unwrap_or(tight.tolerance),
         ..tight
     };
+    let warm = env::<u8>("WARM").is_some_and(|w| w != 0);
+    let hang = |grams: f64| {
+        TipLoad::force(Vector3::new(
+            0.0,
+            -grams * 1e-3 * reference::GRAVITY_M_S2,
+            0.0,
+        ))
+    };
     for g in grams {
-        let load = TipLoad::force(Vector3::new(0.0, -g * 1e-3 * reference::GRAVITY_M_S2, 0.0));
-        let eq = model.solve(&load, Start::Cold, &settings)?;
+        let load = hang(g);
         let converged = model.solve(&load, Start::Cold, &tight)?;
-        let mut batches = Vec::new();
-        for _ in 0..31 {
-            let start = Instant::now();
-            for _ in 0..50 {
-                std::hint::black_box(model.solve(
-                    std::hint::black_box(&load),
-                    Start::Cold,
-                    &settings,
-                )?);
-            }
-            batches.push(start.elapsed().as_secs_f64() * 1e6 / 50.0);
+        let lighter = model.solve(&hang(g * 0.99), Start::Cold, &settings)?;
+        let mut starts = vec![("cold", Start::Cold)];
+        if warm {
+            starts.push(("warm", Start::Warm(lighter.base_strain_per_m)));
+            starts.push(("neighbour", lighter.next_start()));
         }
-        batches.sort_by(f64::total_cmp);
-        let tip = eq.tip_position_m;
-        println!(
-            "mass_g={g} termination={:?} sweeps={} load_steps={} median_us={:.2} tip_m=({:.9},{:.9},{:.9}) from_converged_m={:.1e}",
-            eq.report.termination,
-            eq.report.sweeps,
-            eq.report.load_steps,
-            batches[batches.len() / 2],
-            tip.x,
-            tip.y,
-            tip.z,
-            (tip - converged.tip_position_m).norm(),
-        );
+        for (name, start) in starts {
+            let eq = model.solve(&load, start, &settings)?;
+            let mut batches = Vec::new();
+            for _ in 0..31 {
+                let t0 = Instant::now();
+                for _ in 0..50 {
+                    std::hint::black_box(model.solve(
+                        std::hint::black_box(&load),
+                        start,
+                        &settings,
+                    )?);
+                }
+                batches.push(t0.elapsed().as_secs_f64() * 1e6 / 50.0);
+            }
+            batches.sort_by(f64::total_cmp);
+            let tip = eq.tip_position_m;
+            println!(
+                "mass_g={g} start={name} termination={:?} sweeps={} load_steps={} median_us={:.2} tip_m=({:.9},{:.9},{:.9}) from_converged_m={:.1e}",
+                eq.report.termination,
+                eq.report.sweeps,
+                eq.report.load_steps,
+                batches[batches.len() / 2],
+                tip.x,
+                tip.y,
+                tip.z,
+                (tip - converged.tip_position_m).norm(),
+            );
+        }
     }
     Ok(())
 }

@@ -76,7 +76,7 @@ pub use report::{MAX_FRAME_DRIFT, MAX_PHASE_PER_STEP_RAD, SolveReport, Terminati
 pub use rod::{Cable, Guide, Rod, Section, StrainModel};
 pub use scalar::Scalar;
 pub use shape::ShapePoint;
-pub use shooting::{Equilibrium, Evaluation, ShootingSettings, Start};
+pub use shooting::{Equilibrium, Evaluation, Neighbour, ShootingSettings, Start};
 pub use stability::Stability;
 pub use tendon::{
     DisplacementSettings, DisplacementSolve, MAX_TENDONS, MeasuredTensions, Sliding, Tendon,

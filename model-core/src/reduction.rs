@@ -24,7 +24,7 @@ use crate::error::{ModelError, positive};
 use crate::kinematics::Quaternion;
 use crate::planar::PlanarModel;
 use crate::rod::{Rod, StrainModel};
-use crate::shooting::{Equilibrium, ShootingSettings, Start, TipLoad};
+use crate::shooting::{Equilibrium, ShootingSettings, TipLoad};
 use crate::{Model, Scalar};
 
 pub use crate::tendon::{
@@ -131,7 +131,7 @@ fn solve_variant<T: Scalar>(
             }
         }
     } else {
-        model.solve(load, Start::Cold, settings)?
+        model.solve_dead_load(load, None, settings)?
     };
     Ok((eq, cost))
 }

@@ -31,8 +31,23 @@ use crate::{MAX_CABLES, Scalar};
 pub enum Start<T> {
     /// From nothing: the bent rod's guess (MODEL.md §3.12), then load continuation if needed.
     Cold,
-    /// From a previous base strain, 1/m (the cheap path when loads change a little).
+    /// From a previous base strain, 1/m: Newton with the tangents from the first sweep.
     Warm(Vector3<T>),
+    /// From a solved neighbour ([`Equilibrium::next_start`]), the cheap path when the loads changed
+    /// a little: secant steps from its base strain and shooting Jacobian (Broyden's update) on plain
+    /// sweeps while they contract, and one sweep with the tangents for the stability test at the
+    /// answer (MODEL.md §3.13, `solve/secant.rs`). Where the steps do not converge, Newton goes on
+    /// from where they stopped, as from [`Start::Warm`].
+    Neighbour(Neighbour<T>),
+}
+
+/// A solved equilibrium to start the next solve from ([`Start::Neighbour`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbour<T> {
+    /// The base strain `u(0)`, 1/m, body frame.
+    pub base_strain_per_m: Vector3<T>,
+    /// The shooting Jacobian there, `d (C u(L) - R(L)^T tau_tip) / d u(0)`, N m^2, body frame.
+    pub jacobian_nm2: Matrix3<T>,
 }
 
 /// A solved equilibrium.
@@ -53,6 +68,9 @@ pub struct Equilibrium<T> {
     pub tip_rotation: Matrix3<T>,
     /// Cable lengths, m, in the rod's cable order.
     pub cable_lengths_m: Vec<T, MAX_CABLES>,
+    /// The shooting Jacobian at the answer, `d (C u(L) - R(L)^T tau_tip) / d u(0)`, N m^2 (solves
+    /// for the base strain, [`Model::solve`], that took it or were given it; `None` otherwise).
+    pub jacobian_nm2: Option<Matrix3<T>>,
     /// How the solve went; only `report.termination.is_success()` makes the rest trustworthy.
     pub report: SolveReport<T>,
 }
@@ -61,6 +79,22 @@ impl<T: Scalar> Equilibrium<T> {
     /// The tip tangent (local z) in global coordinates.
     pub fn tip_tangent(&self) -> Vector3<T> {
         self.tip_rotation.column(2).into_owned()
+    }
+
+    /// Where the next solve of the same model should start when the loads change a little: from
+    /// this answer as a [`Start::Neighbour`] when it has its Jacobian, as a [`Start::Warm`] when not,
+    /// and cold when this solve failed.
+    pub fn next_start(&self) -> Start<T> {
+        if !self.report.termination.is_success() {
+            return Start::Cold;
+        }
+        match self.jacobian_nm2 {
+            Some(jacobian_nm2) => Start::Neighbour(Neighbour {
+                base_strain_per_m: self.base_strain_per_m,
+                jacobian_nm2,
+            }),
+            None => Start::Warm(self.base_strain_per_m),
+        }
     }
 }
 
@@ -96,6 +130,7 @@ pub(crate) fn failed_equilibrium<T: Scalar>(
         tip_position_m: Vector3::zeros(),
         tip_rotation: Matrix3::identity(),
         cable_lengths_m: Vec::new(),
+        jacobian_nm2: None,
         report: SolveReport {
             termination,
             iterations: 0,
@@ -140,6 +175,7 @@ pub(crate) fn equilibrium<T: Scalar, const K: usize>(
         tip_position_m: outcome.sweep.tip_position_m,
         tip_rotation: outcome.sweep.tip_rotation,
         cable_lengths_m,
+        jacobian_nm2: None,
         report: SolveReport {
             termination: outcome.termination,
             iterations: solved.work.iterations,
@@ -183,20 +219,77 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         start: Start<T>,
         settings: &ShootingSettings<T>,
     ) -> Result<Equilibrium<T>, ModelError> {
+        match start {
+            Start::Cold => self.solve_dead_load(load, None, settings),
+            Start::Warm(u) => {
+                finite_vec(&u, "warm-start base strain")?;
+                self.solve_dead_load(load, Some(u), settings)
+            }
+            Start::Neighbour(n) => self.solve_near(load, &n, settings),
+        }
+    }
+
+    /// [`Model::solve`] cold (`start` `None`) or warm from a base strain.
+    pub(crate) fn solve_dead_load(
+        &self,
+        load: &TipLoad<T>,
+        start: Option<Vector3<T>>,
+        settings: &ShootingSettings<T>,
+    ) -> Result<Equilibrium<T>, ModelError> {
         load.validate()?;
-        if let Start::Warm(u) = &start {
-            finite_vec(u, "warm-start base strain")?;
+        settings.validate()?;
+        let ode = DeadLoadRod::new(self, load, T::one());
+        let outcome = crate::solve::solve(&ode, start, settings);
+        Ok(self.dead_load_equilibrium(load, outcome, None))
+    }
+
+    /// [`Model::solve`] from a solved neighbour ([`Start::Neighbour`]). Out of line, and apart from
+    /// [`Model::solve_dead_load`]: the images that never start from a neighbour (the estimator's)
+    /// do not carry its chord steps.
+    #[inline(never)]
+    fn solve_near(
+        &self,
+        load: &TipLoad<T>,
+        near: &Neighbour<T>,
+        settings: &ShootingSettings<T>,
+    ) -> Result<Equilibrium<T>, ModelError> {
+        load.validate()?;
+        finite_vec(&near.base_strain_per_m, "warm-start base strain")?;
+        if !crate::scalar::all_finite(&near.jacobian_nm2) {
+            return Err(ModelError::NonFinite("warm-start Jacobian"));
         }
         settings.validate()?;
         let ode = DeadLoadRod::new(self, load, T::one());
-        let start = match start {
-            Start::Cold => None,
-            Start::Warm(u) => Some(u),
+        let outcome = crate::solve::secant::solve_near(
+            &ode,
+            near.base_strain_per_m,
+            &near.jacobian_nm2,
+            settings,
+        );
+        Ok(self.dead_load_equilibrium(load, outcome, Some(&near.jacobian_nm2)))
+    }
+
+    /// The equilibrium a dead-load solve ended with, with the Jacobian at its answer: its sweep's,
+    /// or where that carried no tangents (the stability test off), the neighbour's it was confirmed
+    /// from (`confirmed_from`).
+    fn dead_load_equilibrium(
+        &self,
+        load: &TipLoad<T>,
+        outcome: Result<Solved<T, 3>, Failed>,
+        confirmed_from: Option<&Matrix3<T>>,
+    ) -> Equilibrium<T> {
+        let jacobian_nm2 = match &outcome {
+            Ok(solved) if solved.newton.sweep.has_jacobian() => {
+                Some(solved.newton.sweep.jacobian())
+            }
+            Ok(_) => confirmed_from.copied(),
+            Err(_) => None,
         };
-        let outcome = crate::solve::solve(&ode, start, settings);
-        Ok(equilibrium(load, self.rod().cables.len(), outcome, |u| {
+        let mut eq = equilibrium(load, self.rod().cables.len(), outcome, |u| {
             self.dead_load_base(load, u)
-        }))
+        });
+        eq.jacobian_nm2 = jacobian_nm2;
+        eq
     }
 
     /// The base of a dead-load equilibrium with base strain `u0`: the internal force is the sum of the

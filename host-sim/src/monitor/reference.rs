@@ -118,7 +118,7 @@ pub fn reference_csv(
                 ),
             ));
         }
-        start = Start::Warm(eq.base_strain_per_m);
+        start = eq.next_start();
         model
             .shape(&eq, &s_m, &mut points)
             .map_err(|e| SceneError::new(format!("tick {}", applied.tick), format!("{e:?}")))?;

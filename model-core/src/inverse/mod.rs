@@ -33,7 +33,7 @@ use crate::error::{ModelError, finite, finite_vec, positive};
 use crate::kinematics::Attitude;
 use crate::model::Model;
 use crate::report::SolveReport;
-use crate::shooting::{ShootingSettings, Start, TipLoad};
+use crate::shooting::{ShootingSettings, TipLoad};
 use crate::solve::newton::Work;
 use crate::solve::stopping::default_tolerance;
 use crate::{MAX_CABLES, Scalar};
@@ -262,7 +262,7 @@ where
                 max_rotation_step_rad: settings.max_rotation_step_rad,
                 ..ShootingSettings::default()
             };
-            let eq = model.solve(&basis.load(&p), Start::Cold, &shooting)?;
+            let eq = model.solve_dead_load(&basis.load(&p), None, &shooting)?;
             work.iterations = eq.report.iterations;
             work.sweeps = eq.report.sweeps;
             let x = Point {

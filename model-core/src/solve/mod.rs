@@ -8,6 +8,7 @@
 
 pub(crate) mod continuation;
 pub(crate) mod newton;
+pub(crate) mod secant;
 pub(crate) mod stopping;
 
 use nalgebra::{Const, DimMin, SMatrix, SVector};
@@ -154,17 +155,7 @@ where
         ),
         Some(_) => (settings.max_iterations, T::lit(0.25)),
     };
-    let check = |out: &mut Newton<T, K>| {
-        if out.termination.is_success() && settings.check_stability {
-            let verdict = verdict(ode, &out.sweep);
-            if !verdict.is_acceptable() {
-                out.termination = Termination::Unstable;
-            }
-            verdict
-        } else {
-            Stability::Unchecked
-        }
-    };
+    let check = |out: &mut Newton<T, K>| judge(ode, settings, out);
     // Without a stability test that can reject it, a direct solve cannot tell a wrong branch from the
     // right one: a cold start then follows the branch from the unloaded rod. So with no test, with
     // the test switched off, and with a moment of fixed direction (not conservative: the energy test
@@ -208,9 +199,42 @@ where
                 }),
             };
     }
-    let Some((mut newton, mut stability)) = result else {
+    let Some((newton, stability)) = result else {
         return Err(Failed { work, load_steps });
     };
+    Ok(finish(newton, stability, work, load_steps))
+}
+
+/// The stability verdict on the answer of `out` where the settings ask for one (its sweep carried
+/// the unknowns' tangents with the conjugate-point watch); an unacceptable one makes it
+/// [`Termination::Unstable`].
+pub(crate) fn judge<T: Scalar, O: RodOde<T, K>, const K: usize>(
+    ode: &O,
+    settings: &ShootingSettings<T>,
+    out: &mut Newton<T, K>,
+) -> Stability<T>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    if out.termination.is_success() && settings.check_stability {
+        let verdict = verdict(ode, &out.sweep);
+        if !verdict.is_acceptable() {
+            out.termination = Termination::Unstable;
+        }
+        verdict
+    } else {
+        Stability::Unchecked
+    }
+}
+
+/// A solve's last Newton solve and verdict, with the checks every answer gets: the frame's drift
+/// and the grid's resolution.
+pub(crate) fn finish<T: Scalar, const K: usize>(
+    mut newton: Newton<T, K>,
+    mut stability: Stability<T>,
+    work: Work,
+    load_steps: u16,
+) -> Solved<T, K> {
     if newton.termination.is_success()
         && !(newton.sweep.frame_drift.is_finite()
             && newton.sweep.frame_drift <= T::lit(MAX_FRAME_DRIFT))
@@ -222,12 +246,12 @@ where
         // The grid cannot resolve the test either: no verdict rather than a wrong one.
         stability = Stability::Unchecked;
     }
-    Ok(Solved {
+    Solved {
         newton,
         stability,
         work,
         load_steps,
-    })
+    }
 }
 
 /// Whether a sweep's grid resolves its bending: at most [`MAX_PHASE_PER_STEP_RAD`] per step.

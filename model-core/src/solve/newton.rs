@@ -5,6 +5,7 @@
 //! the answer is first confirmed by a plain sweep, then, with a Jacobian taken near it by the
 //! caller, by chord steps on plain sweeps ([`Chord`]).
 
+use nalgebra::linalg::LU;
 use nalgebra::{Const, DimMin, SMatrix, SVector};
 
 use super::stopping;
@@ -23,6 +24,12 @@ pub(crate) struct Work {
 impl Work {
     pub(crate) fn sweep(&mut self) {
         self.sweeps = self.sweeps.saturating_add(1);
+    }
+
+    /// Adds the work of an earlier stage.
+    pub(crate) fn add(&mut self, earlier: Work) {
+        self.iterations = self.iterations.saturating_add(earlier.iterations);
+        self.sweeps = self.sweeps.saturating_add(earlier.sweeps);
     }
 }
 
@@ -162,10 +169,7 @@ where
     // (At least one Newton iteration is left after them.)
     let steps = u16::from(CHORD_STEPS).min(options.max_iterations.saturating_sub(1));
     for _ in 0..steps {
-        let Some(step) = lu
-            .solve::<Const<K>, Const<1>, _>(&-sw.residual)
-            .filter(|d| d.iter().all(|x| x.is_finite()) && d.norm() <= max_step)
-        else {
+        let Some(step) = bounded_step(&lu, &sw.residual, max_step) else {
             return false;
         };
         work.sweep();
@@ -188,8 +192,23 @@ where
     false
 }
 
+/// The step `lu` (a factored Jacobian) gives against the residual `residual`, if finite and within
+/// the trust region `max_step` (a change of the unknowns, 1/m).
+#[inline]
+pub(crate) fn bounded_step<T: Scalar, const K: usize>(
+    lu: &LU<T, Const<K>, Const<K>>,
+    residual: &SVector<T, K>,
+    max_step: T,
+) -> Option<SVector<T, K>>
+where
+    Const<K>: DimMin<Const<K>, Output = Const<K>>,
+{
+    lu.solve::<Const<K>, Const<1>, _>(&-residual)
+        .filter(|d| d.iter().all(|x| x.is_finite()) && d.norm() <= max_step)
+}
+
 /// Whether the sweep `sw` at unknowns `x` meets the options' tolerance.
-fn converged<T: Scalar, O: RodOde<T, K>, const K: usize>(
+pub(crate) fn converged<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     sw: &Sweep<T, K>,
     x: &SVector<T, K>,

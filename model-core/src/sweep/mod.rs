@@ -194,6 +194,11 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
         self.block(family, |slot| self.d_residual.get(slot).copied())
     }
 
+    /// Whether the sweep carried the unknowns' tangents (has a [`Sweep::jacobian`]).
+    pub fn has_jacobian(&self) -> bool {
+        self.tangents >= K
+    }
+
     /// The shooting Jacobian `d residual / d unknowns`.
     pub fn jacobian(&self) -> SMatrix<T, K, K> {
         self.residual_block(Family::Unknown)

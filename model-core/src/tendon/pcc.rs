@@ -322,6 +322,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             tip_position_m: arcs.tip.0,
             tip_rotation: arcs.tip.1,
             cable_lengths_m: cables.unwrap_or_default(),
+            jacobian_nm2: None,
             report: SolveReport {
                 termination: if finite {
                     Termination::Converged
