@@ -68,8 +68,10 @@ pub struct Equilibrium<T> {
     pub tip_rotation: Matrix3<T>,
     /// Cable lengths, m, in the rod's cable order.
     pub cable_lengths_m: Vec<T, MAX_CABLES>,
-    /// The shooting Jacobian at the answer, `d (C u(L) - R(L)^T tau_tip) / d u(0)`, N m^2 (solves
-    /// for the base strain, [`Model::solve`], that took it or were given it; `None` otherwise).
+    /// The shooting Jacobian at the answer, `d (C u(L) - R(L)^T tau_tip) / d u(0)`, N m^2, for the
+    /// next start ([`Equilibrium::next_start`]): from the tangents of the answer's sweep, or, from a
+    /// neighbour with the stability test off, the secant steps' estimate (Broyden's). `None` for the
+    /// solves other than [`Model::solve`] and for failed ones.
     pub jacobian_nm2: Option<Matrix3<T>>,
     /// How the solve went; only `report.termination.is_success()` makes the rest trustworthy.
     pub report: SolveReport<T>,
@@ -260,18 +262,18 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         }
         settings.validate()?;
         let ode = DeadLoadRod::new(self, load, T::one());
-        let outcome = crate::solve::secant::solve_near(
+        let (outcome, secant) = crate::solve::secant::solve_near(
             &ode,
             near.base_strain_per_m,
             &near.jacobian_nm2,
             settings,
         );
-        Ok(self.dead_load_equilibrium(load, outcome, Some(&near.jacobian_nm2)))
+        Ok(self.dead_load_equilibrium(load, outcome, Some(&secant)))
     }
 
     /// The equilibrium a dead-load solve ended with, with the Jacobian at its answer: its sweep's,
-    /// or where that carried no tangents (the stability test off), the neighbour's it was confirmed
-    /// from (`confirmed_from`).
+    /// or where that carried no tangents (a neighbour's secant steps with the stability test off),
+    /// the secant steps' (`confirmed_from`: the neighbour's, updated by Broyden's rule along them).
     fn dead_load_equilibrium(
         &self,
         load: &TipLoad<T>,

@@ -131,7 +131,7 @@ pub(crate) fn base_strain<T: Scalar, A: Attitude<T>, const NODES: usize>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use nalgebra::Vector3;
 
     use super::*;
@@ -143,7 +143,7 @@ mod tests {
     const L: f64 = 0.39;
 
     /// The thesis's bare Nitinol rod, clamped along +x, gravity `g` along -y, and point loads.
-    fn rod(g: f64, loads: &[PointLoad<f64>]) -> Model<f64> {
+    pub(crate) fn rod(g: f64, loads: &[PointLoad<f64>]) -> Model<f64> {
         let mut rod = Rod::new();
         rod.gravity_m_s2 = Vector3::new(0.0, -g, 0.0);
         rod.guide_mass = GuideMass::Ignore;

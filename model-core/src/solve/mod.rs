@@ -118,7 +118,7 @@ pub(crate) fn solve<T: Scalar, O: RodOde<T, K>, const K: usize>(
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
-    solve_from(ode, start, settings, None)
+    solve_from(ode, start, settings, None, 0)
 }
 
 /// A start expected to be the answer: its first sweep goes without tangents and ends the solve
@@ -130,13 +130,16 @@ pub(crate) struct Confirm<'a, T, const K: usize> {
 }
 
 /// [`solve`] from `start`, or from a start expected to be the answer (`confirm`). Confirming only
-/// for equations without a stability test, whose verdict needs no tangents.
+/// for equations without a stability test, whose verdict needs no tangents. `spent`: iterations an
+/// earlier stage of the same solve used, which a warm start's direct attempt gives up (the
+/// continuation keeps its budget per load step).
 #[inline(never)]
 pub(crate) fn solve_from<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: Option<SVector<T, K>>,
     settings: &ShootingSettings<T>,
     confirm: Option<Confirm<'_, T, K>>,
+    spent: u16,
 ) -> Result<Solved<T, K>, Failed>
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
@@ -153,7 +156,7 @@ where
             settings.max_iterations.min(DIRECT_ITERATIONS),
             cap(ode.guess().norm() * length).min(T::lit(0.5)),
         ),
-        Some(_) => (settings.max_iterations, T::lit(0.25)),
+        Some(_) => (settings.max_iterations.saturating_sub(spent), T::lit(0.25)),
     };
     let check = |out: &mut Newton<T, K>| judge(ode, settings, out);
     // Without a stability test that can reject it, a direct solve cannot tell a wrong branch from the

@@ -17,7 +17,7 @@ use nalgebra::{Const, DimMin, SMatrix, SVector};
 
 use super::newton::{Newton, NewtonOptions, Work, bounded_step, converged, newton_in_place};
 use super::stopping::residual_converged;
-use super::{Failed, ShootingSettings, Solved, finish, judge, solve};
+use super::{Failed, ShootingSettings, Solved, finish, judge, solve_from};
 use crate::Scalar;
 use crate::ode::RodOde;
 use crate::report::Termination;
@@ -29,13 +29,14 @@ const SECANT_STEPS: u16 = 6;
 /// The contraction each step must reach (its residual over the last) for the next to be tried.
 const SECANT_CONTRACTION: f64 = 0.25;
 
-/// Solves `ode` from `start`, a neighbour's unknowns, with the neighbour's shooting Jacobian.
+/// Solves `ode` from `start`, a neighbour's unknowns, with the neighbour's shooting Jacobian; with
+/// the solve, the Jacobian the secant steps ended with (Broyden's, at the last point they kept).
 pub(crate) fn solve_near<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     start: SVector<T, K>,
     jacobian: &SMatrix<T, K, K>,
     settings: &ShootingSettings<T>,
-) -> Result<Solved<T, K>, Failed>
+) -> (Result<Solved<T, K>, Failed>, SMatrix<T, K, K>)
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
@@ -49,12 +50,21 @@ where
     };
     let tested = settings.check_stability && ode.has_stability_test();
     let mut work = Work::default();
+    let mut secant = *jacobian;
     let mut x = start;
     work.sweep();
     let mut sw = sweep(ode, &x, TangentSet::NONE, None);
     let mut converged = sw.finite
         && (converged(ode, &sw, &x, &options)
-            || secant_steps(ode, &mut x, &mut sw, jacobian, &options, tested, &mut work));
+            || secant_steps(
+                ode,
+                &mut x,
+                &mut sw,
+                &mut secant,
+                &options,
+                tested,
+                &mut work,
+            ));
     if !converged && sw.finite && sw.has_jacobian() {
         // The step predicted to converge did not: Newton goes on from its sweep.
         let rest = NewtonOptions {
@@ -77,19 +87,21 @@ where
         };
         let stability = judge(ode, settings, &mut newton);
         if newton.termination.is_success() {
-            return Ok(finish(newton, stability, work, 0));
+            return (Ok(finish(newton, stability, work, 0)), secant);
         }
     }
-    let mut outcome = solve(ode, Some(x), settings);
+    // The warm start's direct attempt gets what the steps left of the iterations.
+    let mut outcome = solve_from(ode, Some(x), settings, None, work.iterations);
     match &mut outcome {
         Ok(solved) => solved.work.add(work),
         Err(failed) => failed.work.add(work),
     }
-    outcome
+    (outcome, secant)
 }
 
 /// Secant steps from `x`, whose plain sweep is `sw`, starting from `jacobian`, each within the
-/// trust region: `x` and `sw` move to each step that lowers the residual. Whether the solve is
+/// trust region: `x` and `sw` move to each step that lowers the residual, and `jacobian` takes
+/// Broyden's update along it. Whether the solve is
 /// converged there; with `tested`, the step predicted to converge is swept with the tangents.
 /// Out of line: its trial sweep stays out of the caller's frame.
 #[inline(never)]
@@ -97,7 +109,7 @@ fn secant_steps<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
     x: &mut SVector<T, K>,
     sw: &mut Sweep<T, K>,
-    jacobian: &SMatrix<T, K, K>,
+    jacobian: &mut SMatrix<T, K, K>,
     options: &NewtonOptions<T>,
     tested: bool,
     work: &mut Work,
@@ -105,7 +117,6 @@ fn secant_steps<T: Scalar, O: RodOde<T, K>, const K: usize>(
 where
     Const<K>: DimMin<Const<K>, Output = Const<K>>,
 {
-    let mut jacobian = *jacobian;
     let max_step = options.max_step_rad / ode.length_m();
     let mut residual = ode.residual_size(&sw.residual);
     let mut with_tangents = false;
@@ -134,7 +145,7 @@ where
         }
         // Broyden: the Jacobian takes the residual's change along the step.
         let change = trial.residual - sw.residual;
-        jacobian += (change - jacobian * step) * (step / step.norm_squared()).transpose();
+        *jacobian += (change - *jacobian * step) * (step / step.norm_squared()).transpose();
         (*x, *sw) = (trial_x, trial);
         if converged(ode, sw, x, options) {
             return true;
@@ -150,4 +161,160 @@ where
             tested && residual_converged(predicted, ode.rotation_rad(x), options.tolerance);
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Matrix3, Vector3};
+
+    use super::*;
+    use crate::loads::TipLoad;
+    use crate::model::Model;
+    use crate::ode::dead_load::DeadLoadRod;
+    use crate::ode::guess::tests::rod;
+    use crate::shooting::Start;
+    use crate::solve::stopping::default_tolerance;
+    use crate::stability::Stability;
+
+    /// The thesis's bare rod (12 steps, gravity) under `grams` at the tip.
+    fn hang(grams: f64) -> TipLoad<f64> {
+        TipLoad::force(Vector3::new(0.0, -grams * 1e-3 * 9.81, 0.0))
+    }
+
+    /// The answer at 40.2 g, and the neighbour at 1 % lighter (base strain, Jacobian).
+    fn scene() -> (Model<f64>, Vector3<f64>, Vector3<f64>, Matrix3<f64>) {
+        let model = rod(9.81, &[]);
+        let settings = ShootingSettings::default();
+        let answer = model.solve(&hang(40.2), Start::Cold, &settings).unwrap();
+        let lighter = model
+            .solve(&hang(40.2 * 0.99), Start::Cold, &settings)
+            .unwrap();
+        assert!(answer.report.termination.is_success());
+        assert!(lighter.report.termination.is_success());
+        (
+            model,
+            answer.base_strain_per_m,
+            lighter.base_strain_per_m,
+            lighter.jacobian_nm2.unwrap(),
+        )
+    }
+
+    fn options(tolerance: f64, max_iterations: u16) -> NewtonOptions<f64> {
+        NewtonOptions {
+            tolerance,
+            to_rounding: true,
+            max_step_rad: 1.0,
+            max_iterations,
+            tangents: TangentSet::unknowns(true),
+            plain_first: true,
+        }
+    }
+
+    /// Each exit of the secant steps from the 1 % lighter neighbour at 40.2 g: with its Jacobian they
+    /// converge on plain sweeps (each step one sweep and one iteration) and update the Jacobian;
+    /// at a looser tolerance the step predicted to converge carries the tangents and is the last;
+    /// a step beyond the trust region (`J / 1e9`) is refused before its sweep; a trial that does not lower the residual (`-J`) is swept and left; a step that
+    /// lowers it less than fourfold (`2 J`: by about half) is kept and ends them; they leave the
+    /// solve at least one iteration.
+    #[test]
+    fn secant_steps_take_only_steps_that_contract() {
+        let (model, answer, start, j) = scene();
+        let ode = DeadLoadRod::new(&model, &hang(40.2), 1.0);
+        let tight = default_tolerance();
+        // (jacobian, tolerance, iterations, tested, converges, sweeps, moved, tangents at the end)
+        let cases = [
+            (j, tight, 40, true, true, None, true, false),
+            (j, 1e-8, 40, true, true, None, true, true),
+            (j, tight, 40, false, true, None, true, false),
+            (j / 1e9, tight, 40, true, false, Some(0), false, false),
+            (-j, tight, 40, true, false, Some(1), false, false),
+            (j * 2.0, tight, 40, true, false, Some(1), true, false),
+            (j, tight, 2, true, false, Some(1), true, false),
+        ];
+        for (k, (jacobian, tolerance, iterations, tested, converges, sweeps, moves, tangents)) in
+            cases.into_iter().enumerate()
+        {
+            let options = options(tolerance, iterations);
+            let mut x = start;
+            let mut sw = sweep(&ode, &x, TangentSet::NONE, None);
+            let before = ode.residual_size(&sw.residual);
+            let mut secant = jacobian;
+            let mut work = Work::default();
+            let done = secant_steps(
+                &ode,
+                &mut x,
+                &mut sw,
+                &mut secant,
+                &options,
+                tested,
+                &mut work,
+            );
+            assert_eq!(done, converges, "case {k}: {work:?}");
+            assert_eq!(work.sweeps, work.iterations, "case {k}: one sweep a step");
+            if let Some(sweeps) = sweeps {
+                assert_eq!(work.sweeps, sweeps, "case {k}");
+            }
+            assert!(work.iterations < iterations, "case {k}: one iteration left");
+            assert_eq!(x != start, moves, "case {k}");
+            assert_eq!(sw.has_jacobian(), tangents, "case {k}");
+            assert!(ode.residual_size(&sw.residual) <= before, "case {k}");
+            if converges {
+                let apart = (x - answer).norm() / answer.norm();
+                assert!(apart < 1e-9, "case {k}: {apart:e} from the answer");
+                assert!(secant != jacobian, "case {k}: the Jacobian took the steps");
+                assert!(work.sweeps <= 4, "case {k}: {work:?}");
+            }
+        }
+    }
+
+    /// The whole solve from the neighbour: with the stability test, the answer's sweep carries the
+    /// tangents and its verdict (Stable), at most one sweep more than its steps; without it, no sweep
+    /// carries tangents at all; the answer is the cold one's; and a budget of two iterations, with
+    /// no cold fallback, is kept whatever the neighbour's Jacobian.
+    #[test]
+    fn a_neighbour_is_confirmed_on_plain_sweeps_and_tested_once() {
+        let (model, answer, start, j) = scene();
+        let ode = DeadLoadRod::new(&model, &hang(40.2), 1.0);
+        let settings = ShootingSettings::default();
+        let (solved, secant) = solve_near(&ode, start, &j, &settings);
+        let solved = solved.unwrap();
+        assert!(solved.newton.termination.is_success());
+        assert_eq!(solved.stability, Stability::Stable);
+        assert!(solved.newton.sweep.has_jacobian());
+        assert!(
+            solved.work.sweeps <= solved.work.iterations + 2,
+            "{:?}",
+            solved.work
+        );
+        assert!((solved.newton.x - answer).norm() / answer.norm() < 1e-9);
+        assert!(secant != j);
+
+        let untested = ShootingSettings {
+            check_stability: false,
+            ..settings
+        };
+        let (solved, _) = solve_near(&ode, start, &j, &untested);
+        let solved = solved.unwrap();
+        assert!(solved.newton.termination.is_success());
+        assert!(
+            !solved.newton.sweep.has_jacobian(),
+            "no sweep with tangents"
+        );
+        assert_eq!(solved.stability, Stability::Unchecked);
+        assert!((solved.newton.x - answer).norm() / answer.norm() < 1e-9);
+
+        let budget = ShootingSettings {
+            max_iterations: 2,
+            cold_fallback: false,
+            ..settings
+        };
+        for jacobian in [j, -j, j * 2.0, j / 1e9] {
+            let (solved, _) = solve_near(&ode, start, &jacobian, &budget);
+            let work = match solved {
+                Ok(s) => s.work,
+                Err(f) => f.work,
+            };
+            assert!(work.iterations <= 2, "{work:?}");
+        }
+    }
 }

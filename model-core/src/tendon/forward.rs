@@ -137,7 +137,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
             None => None,
         };
-        let outcome = crate::solve::solve_from(&ode, start, settings, confirm);
+        let outcome = crate::solve::solve_from(&ode, start, settings, confirm, 0);
         let x = outcome.as_ref().ok().map(|s| s.newton.x);
         let mut eq = equilibrium(load, 0, outcome, |x| ode.base(x));
         let mut tensions = Vec::new();
