@@ -247,7 +247,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
 
     /// [`Model::solve`] from a solved neighbour ([`Start::Neighbour`]). Out of line, and apart from
     /// [`Model::solve_dead_load`]: the images that never start from a neighbour (the estimator's)
-    /// do not carry its chord steps.
+    /// do not carry its secant steps.
     #[inline(never)]
     fn solve_near(
         &self,
@@ -273,18 +273,18 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
 
     /// The equilibrium a dead-load solve ended with, with the Jacobian at its answer: its sweep's,
     /// or where that carried no tangents (a neighbour's secant steps with the stability test off),
-    /// the secant steps' (`confirmed_from`: the neighbour's, updated by Broyden's rule along them).
+    /// the secant steps' (`secant`: the neighbour's, updated by Broyden's rule along them).
     fn dead_load_equilibrium(
         &self,
         load: &TipLoad<T>,
         outcome: Result<Solved<T, 3>, Failed>,
-        confirmed_from: Option<&Matrix3<T>>,
+        secant: Option<&Matrix3<T>>,
     ) -> Equilibrium<T> {
         let jacobian_nm2 = match &outcome {
             Ok(solved) if solved.newton.sweep.has_jacobian() => {
                 Some(solved.newton.sweep.jacobian())
             }
-            Ok(_) => confirmed_from.copied(),
+            Ok(_) => secant.copied(),
             Err(_) => None,
         };
         let mut eq = equilibrium(load, self.rod().cables.len(), outcome, |u| {

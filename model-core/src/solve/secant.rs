@@ -10,8 +10,8 @@
 //! sweep with the tangents only once, for the stability test: taken at the step the slowest
 //! contraction so far predicts to converge, it is also that step's sweep, and where the prediction
 //! misses, Newton goes on from it. Where the steps stop contracting, or the answer is refused, the
-//! solve goes on as a warm start from where they stopped ([`super::solve`]): Newton with the
-//! tangents, then the load continuation.
+//! solve goes on as a warm start from where they stopped ([`super::solve_from`], with what they left
+//! of the iterations): Newton with the tangents, then the load continuation.
 
 use nalgebra::{Const, DimMin, SMatrix, SVector};
 
@@ -101,9 +101,9 @@ where
 
 /// Secant steps from `x`, whose plain sweep is `sw`, starting from `jacobian`, each within the
 /// trust region: `x` and `sw` move to each step that lowers the residual, and `jacobian` takes
-/// Broyden's update along it. Whether the solve is
-/// converged there; with `tested`, the step predicted to converge is swept with the tangents.
-/// Out of line: its trial sweep stays out of the caller's frame.
+/// Broyden's update along it. Whether the solve is converged there; with `tested`, the step
+/// predicted to converge is swept with the tangents. Out of line: its trial sweep stays out of the
+/// caller's frame.
 #[inline(never)]
 fn secant_steps<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
