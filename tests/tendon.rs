@@ -298,6 +298,65 @@ fn tendon_dense_guides_agree_with_a_published_implementation() {
     }
 }
 
+/// Rao et al.'s two-section robot (`host-sim/scenes/tendon_rao_two_section.toml`): its tendons'
+/// compression alone, counted as a tip force would bend the rod (`sum tau L^2 / E I`), is 94 rad at
+/// 6 N, which a cold solve's load continuation must not take for a turn (MODEL.md 6.5). The cold
+/// solve takes at most three load steps (nine before) and lands where a warm chain in 5 % steps of
+/// every load from the unloaded rod does, also under a tip force pushing the rod back along its
+/// base tangent at 2.5 times the straight cantilever's buckling load.
+#[test]
+fn a_cold_tendon_solve_steps_by_shape_not_by_compression() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../host-sim/scenes/tendon_rao_two_section.toml"
+    );
+    let mut scene = host_sim::scene::Scene::load(std::path::Path::new(path)).unwrap();
+    for section in &mut scene.sections {
+        section.steps = 20;
+    }
+    let model = Model::<f64>::new(scene.rod().unwrap()).unwrap();
+    let tendons = scene.tendon_set(&model).unwrap().unwrap();
+    // pi^2 E I / (4 L^2) of the 0.4 m, 1.4 mm, 54 GPa rod: 0.157 N.
+    let push = -2.5 * 0.157;
+    let chain_settings = ShootingSettings {
+        cold_fallback: false,
+        ..settings()
+    };
+    for (tensions, force, most_steps) in [
+        ([4.0, 0.0, 0.0, 0.0, 2.0, 0.0], [0.0; 3], 3),
+        ([0.0, 2.0, 1.0, 0.0, 0.0, 1.5], [0.0; 3], 3),
+        ([1.0, 0.0, 0.0, 0.0, 0.5, 0.0], [0.0, 0.0, push], 64),
+    ] {
+        let at = |k: f64| {
+            let tau: Vec<f64> = tensions.iter().map(|t| t * k).collect();
+            (tau, TipLoad::force(Vector3::from(force) * k))
+        };
+        let (tau, load) = at(1.0);
+        let cold = model
+            .solve_tendons(&tendons, &tau, &load, None, &settings())
+            .unwrap();
+        assert!(cold.is_success(), "{:?}", cold.equilibrium.report);
+        let steps = cold.equilibrium.report.load_steps;
+        assert!(steps <= most_steps, "{tensions:?}: {steps} load steps");
+        let mut chain: Option<TendonEquilibrium<f64>> = None;
+        for k in 1..=20 {
+            let (tau, load) = at(f64::from(k) / 20.0);
+            let next = model
+                .solve_tendons(&tendons, &tau, &load, chain.as_ref(), &chain_settings)
+                .unwrap();
+            assert!(next.is_success(), "step {k}: {:?}", next.equilibrium.report);
+            chain = Some(next);
+        }
+        let chain = chain.unwrap().equilibrium.tip_position_m;
+        let gap = (cold.equilibrium.tip_position_m - chain).norm();
+        println!("{tensions:?} {force:?}: {steps} load steps, {gap:e} m from the chain");
+        assert!(
+            gap < 1e-9,
+            "{tensions:?} {force:?}: {gap:e} m from the chain"
+        );
+    }
+}
+
 /// Bad input is a typed error, never a panic: negative or non-finite tensions, a count that does
 /// not match, a termination between guides or beyond the last, no tendons.
 #[test]

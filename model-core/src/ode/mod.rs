@@ -216,6 +216,14 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn rotation_rad(&self, x: &SVector<T, K>) -> T {
         x.norm() * self.length_m()
     }
+
+    /// How far a change `dx` of the unknowns moves the rod, rad: the load continuation's bound on
+    /// a step's answer against its prediction, and the size of its first step (the base strain's
+    /// `|dx| L` unless the unknowns hold more than a rotation).
+    #[inline]
+    fn change_rad(&self, dx: &SVector<T, K>) -> T {
+        dx.norm() * self.length_m()
+    }
 }
 
 /// `e_j`, the `j`-th unit vector.

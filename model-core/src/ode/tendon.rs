@@ -1225,6 +1225,26 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     fn rotation_rad(&self, x: &SVector<T, 6>) -> T {
         self.rod.rotation_rad(x)
     }
+
+    /// The base force's rows count against the tendons' tensions as well as the rod's stiffness
+    /// (MODEL.md 6.5): the base force is the tendons' pull along their first chords, so a turn
+    /// `phi` of those chords moves it by `sum tau phi`, which the force rows (`|n| L / E I`, times
+    /// `L`: what a tip force would bend the rod by) would count `sum tau L^2 / E I` times (94 on a
+    /// 0.4 m, 1.4 mm Nitinol rod at 6 N). Divided by `1 + sum tau L^2 / E I`, that turn counts as a
+    /// turn; without tensions the rows are the force-state rod's.
+    fn change_rad(&self, dx: &SVector<T, 6>) -> T {
+        let length = self.model.length_m();
+        let total_n = self.tensions().iter().fold(T::zero(), |a, t| a + t.abs());
+        // `sum tau L / E I`: the force rows of the tensions' sum.
+        let pull = self.rod.unknowns(
+            &Vector3::new(total_n, T::zero(), T::zero()),
+            &Vector3::zeros(),
+        );
+        let k = pull.fixed_rows::<3>(0).norm() * length;
+        let force = dx.fixed_rows::<3>(0).norm() / (T::one() + k);
+        let moment = dx.fixed_rows::<3>(3).norm();
+        (force * force + moment * moment).sqrt() * length
+    }
 }
 
 #[cfg(test)]

@@ -12,8 +12,9 @@ use crate::Scalar;
 use crate::ode::RodOde;
 use crate::sweep::TangentSet;
 
-/// During continuation a corrected solution may differ from its prediction by at most this base
-/// rotation, rad; a larger jump is treated as a hop to another branch and the load step is halved.
+/// During continuation a corrected solution may differ from its prediction by at most this much,
+/// rad ([`RodOde::change_rad`]); a larger jump is treated as a hop to another branch and the load
+/// step is halved.
 const PREDICTOR_TRUST_RAD: f64 = 0.5;
 
 /// The smallest load step, as a fraction of the full load, before continuation gives up.
@@ -47,7 +48,6 @@ where
         tangents: TangentSet::unknowns(true),
         plain_first: false,
     };
-    let trust = T::lit(PREDICTOR_TRUST_RAD) / ode.length_m();
     while *load_steps < settings.max_load_steps {
         let target = (alpha + step).min(T::one());
         let scaled = ode.at_scale(target);
@@ -61,7 +61,7 @@ where
         let iterations_before = work.iterations;
         let out = newton(&scaled, guess, None, None, &options, work);
         let accepted = out.termination.is_success()
-            && (out.x - guess).norm() <= trust
+            && scaled.change_rad(&(out.x - guess)) <= T::lit(PREDICTOR_TRUST_RAD)
             && verdict(&scaled, &out.sweep).is_acceptable();
         if accepted {
             (prev_alpha, prev_x) = (alpha, x);

@@ -146,7 +146,6 @@ where
 {
     let mut work = Work::default();
     let mut load_steps = 0u16;
-    let length = ode.length_m();
 
     // A cold start tries the full load from the bent rod's guess ([`RodOde::cold_guess`]); if that
     // fails, load continuation starts with a step that bends the linear rod by GUESS_ANGLE_RAD
@@ -154,7 +153,7 @@ where
     let (direct_iterations, first_step) = match start {
         None => (
             settings.max_iterations.min(DIRECT_ITERATIONS),
-            cap(ode.guess().norm() * length).min(T::lit(0.5)),
+            cap(ode.change_rad(&ode.guess())).min(T::lit(0.5)),
         ),
         Some(_) => (settings.max_iterations.saturating_sub(spent), T::lit(0.25)),
     };
