@@ -9,13 +9,14 @@
 //! the 0.95 tensions' displacements; and the continuous routing from tensions, cold. Each line
 //! gives the termination, sweeps, load steps, the median wall time per solve (`BATCHES` batches of
 //! `REPEATS` solves, the median of the batch means; defaults 11 and 5), the tip and its distance
-//! from the reference (the same model at 800 RK4 steps per section) and the tensions. `STEPS` sets the steps per section
-//! of the timed solves (default the scene's).
+//! from the reference (the same model at 800 RK4 steps per section) and the tensions. `STEPS` sets
+//! the steps per section of the timed solves (default the scene's).
 
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use host_sim::run::spool_displacements;
 use host_sim::scene::{Scene, SceneError};
 use model_core::{
     DisplacementSettings, Model, ShootingSettings, TendonEquilibrium, Tendons, TipLoad,
@@ -43,20 +44,6 @@ fn robot(scene: &Scene, steps: Option<u16>) -> Result<(Model<f64>, Tendons<f64>)
         .tendon_set(&model)?
         .ok_or_else(|| SceneError::new("tendon", "the scene has no [[tendon]]"))?;
     Ok((model, tendons))
-}
-
-/// Spool displacements, m, that leave each tendon the unstretched length `solved` needs.
-fn displacements_m(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
-    tendons
-        .tendons()
-        .iter()
-        .enumerate()
-        .map(|(j, t)| {
-            let rest = tendons.rest_length_m(j).unwrap_or(f64::NAN);
-            let needed = solved.unstretched_m.get(j).copied().unwrap_or(f64::NAN);
-            t.feed_length_m + rest - needed
-        })
-        .collect()
 }
 
 /// Median over batches of the mean wall time per call of `solve`, us.
@@ -105,7 +92,7 @@ fn main() -> Result<(), SceneError> {
         .solve_tendons(&fine_tendons, &tensions, &load, None, &settings)
         .map_err(refused("reference"))?;
     let reference_tip = reference.equilibrium.tip_position_m;
-    let target = displacements_m(&fine_tendons, &reference);
+    let target = spool_displacements(&fine_tendons, &reference);
 
     let lighter: Vec<f64> = tensions.iter().map(|t| t * 0.95).collect();
     let previous = model
@@ -114,7 +101,7 @@ fn main() -> Result<(), SceneError> {
     let previous_displacement = model
         .solve_displacements(
             &tendons,
-            &displacements_m(&tendons, &previous),
+            &spool_displacements(&tendons, &previous),
             &load,
             None,
             &settings,

@@ -829,7 +829,7 @@ fn tendon_shape<A: Attitude<f64>>(
 /// The spool displacements that hold the tendons at their tensions: `rest + feed - N`, `N` the
 /// unstretched length the equilibrium needs (model-core's slack with no slack; `rest` is the
 /// termination's arc length).
-fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
+pub fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
     tendons
         .tendons()
         .iter()
