@@ -287,10 +287,14 @@ bench_expected() {
 }
 
 check "cargo fmt --check" cargo fmt --check
-check "host tests (cargo test --lib --target $HOST)" cargo test --lib --target "$HOST"
+# The host tests and their clippy with the bench's two-section cases (`two-section-bench`), which
+# the images but the bench are built without.
+check "host tests (cargo test --lib --target $HOST --features two-section-bench)" \
+    cargo test --lib --target "$HOST" --features two-section-bench
 check "host fault scenarios (outage, slipped magnet, power-up off home, stuck sensor, slack cable)" \
-    cargo test --lib --target "$HOST" scenarios:: -- --nocapture
-check "clippy: host lib and tests" cargo clippy --lib --tests --target "$HOST" -- -D warnings
+    cargo test --lib --target "$HOST" --features two-section-bench scenarios:: -- --nocapture
+check "clippy: host lib and tests" \
+    cargo clippy --lib --tests --target "$HOST" --features two-section-bench -- -D warnings
 check "clippy: target lib and images (with the board image and the live link: the default features)" \
     cargo clippy --release --lib --bins -- -D warnings
 # Without the default `board` feature: the QEMU images as expected/ records them (the feature changes
@@ -300,6 +304,10 @@ check "build the QEMU images (release, $TARGET)" cargo build --release --no-defa
 # images above are built without it, as expected/ records them.
 check "build the e2e image with the live link (release, $TARGET)" \
     cargo build --release --no-default-features --features link --bin e2e
+# The bench image alone with the two-section robot's cases (`two-section-bench`), as
+# expected/bench.run records it: in the library, they change the tendon image's code.
+check "build the bench image with the two-section robot (release, $TARGET)" \
+    cargo build --release --no-default-features --features two-section-bench --bin bench
 check "QEMU selftest: model-core self-checks in f32" run_image selftest 0 '^[0-9]+ passed, 0 failed$'
 check "QEMU golden: golden rows from cable lengths, tip within 0.1 mm" run_image golden 0 '^golden: [0-9]+ passed, 0 failed$'
 check "QEMU e2e: recorded encoder trajectory against the f64 reference, a record a tick on USART1" run_e2e

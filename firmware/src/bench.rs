@@ -30,6 +30,19 @@
 //!   (`Model::update_displacements`; the costliest reported, with the worst tip error against the
 //!   f64 reference),
 //! * `tendon_update_warm_median`: the same updates' median cost (and that update's sweeps).
+//!
+//! With the feature `two-section-bench` (the `bench` image as `test.sh` builds it), the two-section,
+//! six-tendon robot of the golden reference (`model_checks::reference::tendon_two_section`, with
+//! gravity; its tendons steel wire behind a feed, as [`crate::tendon`]'s) at
+//! [`crate::tendon::STEPS_PER_SECTION`], along the tensions
+//! `model_checks::reference::tendon_two_section_actuation_n` (every tendon taut): each tick's
+//! displacements are those that hold the f32 forward solve at its tensions
+//! (`Tendons::displacements_holding_m`), whose tip is each case's truth:
+//! * `two_section_forward_cold`: a cold forward solve from tick 0's tensions,
+//! * `two_section_displacement_cold`: a cold displacement-controlled solve of tick 0,
+//! * `two_section_update_warm`: the warm updates of every later tick (the costliest reported, with
+//!   the worst tip error),
+//! * `two_section_update_warm_median`: the same updates' median cost (and that update's sweeps).
 
 use model_checks::reference::golden_bench;
 use model_core::inverse::{Estimator, EstimatorSettings, LoadBasis};
@@ -250,7 +263,10 @@ pub fn run(
             }
         }
     }
-    tendon_cases(measure, report)
+    tendon_cases(measure, report)?;
+    #[cfg(feature = "two-section-bench")]
+    two_section_cases(measure, report)?;
+    Ok(())
 }
 
 /// The tendon-driven robot's cases (see the module's documentation).
@@ -330,24 +346,154 @@ fn tendon_cases(
         }
         previous = Some(out);
     }
+    report_warm(
+        ["tendon_update_warm", "tendon_update_warm_median"],
+        &worst,
+        worst_sweeps,
+        &mut costs,
+        &line,
+        report,
+    );
+    Ok(())
+}
+
+/// The two-section robot's tendons' axial stiffness `E_t A_t`, N: steel wire of 0.3 mm, as the
+/// tendon robot's ([`crate::tendon`]'s default robot file).
+#[cfg(feature = "two-section-bench")]
+pub const TWO_SECTION_TENDON_STIFFNESS_N: f32 = 14_000.0;
+
+/// The two-section robot's feed from each spool to the base plate, m, as the tendon robot's.
+#[cfg(feature = "two-section-bench")]
+pub const TWO_SECTION_FEED_M: f32 = 0.3;
+
+/// The two-section robot's cases (see the module's documentation). Behind a feature: in the
+/// library, its monomorphisations (another node count) moved the inlining of code the tendon image
+/// shares, and that image's stack high-water by 232 B, over its budget.
+#[cfg(feature = "two-section-bench")]
+fn two_section_cases(
+    measure: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+    report: &mut dyn FnMut(&BenchLine),
+) -> Result<(), ModelError> {
+    use model_checks::reference::{
+        TENDON_TWO_SECTION_TICKS, tendon_two_section, tendon_two_section_actuation_n,
+    };
+    use model_core::{
+        DisplacementSettings, DisplacementSolve, Model, Quaternion, TendonEquilibrium, Tendons,
+    };
+
+    let steps = crate::tendon::STEPS_PER_SECTION;
+    let (rod, mut specs) = tendon_two_section::<f32>(steps, 9.81)?;
+    for t in specs.iter_mut() {
+        t.axial_stiffness_n = Some(TWO_SECTION_TENDON_STIFFNESS_N);
+        t.feed_length_m = TWO_SECTION_FEED_M;
+    }
+    let model = Model::<f32, Quaternion<f32>>::new(rod)?;
+    let tendons = Tendons::new(&model, &specs)?;
+    let settings = ShootingSettings::default();
+    let control = DisplacementSettings::default();
+    let zero = TipLoad::zero();
+    let line = |case, cost, sweeps: u32, converged, tip_error_m| BenchLine {
+        case,
+        steps_per_section: steps,
+        total_steps: model.plan().total_steps(),
+        cost,
+        sweeps: u16::try_from(sweeps).unwrap_or(u16::MAX),
+        converged,
+        tip_error_m,
+    };
+    let tip_error = |solved: &TendonEquilibrium<f32>, truth: &TendonEquilibrium<f32>| {
+        (solved.equilibrium.tip_position_m - truth.equilibrium.tip_position_m).norm()
+    };
+
+    let mut truth: Option<TendonEquilibrium<f32>> = None;
+    let mut previous: Option<DisplacementSolve<f32>> = None;
+    let mut worst = Worst::default();
+    let mut worst_sweeps = 0u32;
+    let mut costs = [(0u64, 0u32); TENDON_TWO_SECTION_TICKS - 1];
+    for tick in 0..TENDON_TWO_SECTION_TICKS {
+        let tensions = tendon_two_section_actuation_n(tick).map(|t| t as f32);
+        let mut forward = None;
+        let cost = measure(&mut || {
+            forward =
+                Some(model.solve_tendons(&tendons, &tensions, &zero, truth.as_ref(), &settings));
+        });
+        let forward = forward.unwrap_or(Err(ModelError::Empty("measurement")))?;
+        if tick == 0 {
+            report(&line(
+                "two_section_forward_cold",
+                cost,
+                u32::from(forward.equilibrium.report.sweeps),
+                forward.is_success(),
+                0.0,
+            ));
+        }
+        let d = tendons.displacements_holding_m(&forward);
+        let mut out = None;
+        let cost = measure(&mut || {
+            out = Some(match &previous {
+                None => model.solve_displacements(&tendons, &d, &zero, None, &settings, &control),
+                Some(p) => model.update_displacements(&tendons, &d, &zero, p, &settings, &control),
+            });
+        });
+        let out = out.unwrap_or(Err(ModelError::Empty("measurement")))?;
+        let error = tip_error(&out.solved, &forward);
+        if tick == 0 {
+            report(&line(
+                "two_section_displacement_cold",
+                cost,
+                out.sweeps,
+                out.is_success() && forward.is_success(),
+                error,
+            ));
+        } else {
+            worst.add(cost, 0, out.is_success() && forward.is_success(), error);
+            worst_sweeps = worst_sweeps.max(out.sweeps);
+            if let Some(slot) = costs.get_mut(tick - 1) {
+                *slot = (cost, out.sweeps);
+            }
+        }
+        truth = Some(forward);
+        previous = Some(out);
+    }
+    report_warm(
+        ["two_section_update_warm", "two_section_update_warm_median"],
+        &worst,
+        worst_sweeps,
+        &mut costs,
+        &line,
+        report,
+    );
+    Ok(())
+}
+
+/// A tendon robot's warm updates as two lines, `cases`: the costliest (with the most sweeps of any
+/// tick, every tick's convergence and the worst tip error) and the median tick (its cost and
+/// sweeps); `costs` (cost, sweeps) of every tick, sorted here.
+fn report_warm(
+    cases: [&'static str; 2],
+    worst: &Worst,
+    worst_sweeps: u32,
+    costs: &mut [(u64, u32)],
+    line: &dyn Fn(&'static str, u64, u32, bool, f32) -> BenchLine,
+    report: &mut dyn FnMut(&BenchLine),
+) {
+    let [costliest, median] = cases;
     report(&line(
-        "tendon_update_warm",
+        costliest,
         worst.cost,
         worst_sweeps,
         worst.all_done,
         worst.tip_error_m,
     ));
-    // The typical tick: the median cost (and that tick's sweeps).
     costs.sort_unstable();
     let (cost, sweeps) = costs.get(costs.len() / 2).copied().unwrap_or_default();
     report(&line(
-        "tendon_update_warm_median",
+        median,
         cost,
         sweeps,
         worst.all_done,
         worst.tip_error_m,
     ));
-    Ok(())
 }
 
 /// The worst of a series of updates.
@@ -406,7 +552,12 @@ mod tests {
             },
             &mut |l| lines.push(*l),
         )?;
-        assert_eq!(lines.len(), 8 * STEP_COUNTS.len() + 4);
+        let two_section = if cfg!(feature = "two-section-bench") {
+            4
+        } else {
+            0
+        };
+        assert_eq!(lines.len(), 8 * STEP_COUNTS.len() + 4 + two_section);
         for l in &lines {
             println!("{l:?}");
             if !must_converge(l.case) {

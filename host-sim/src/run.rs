@@ -826,20 +826,11 @@ fn tendon_shape<A: Attitude<f64>>(
     Ok(points)
 }
 
-/// The spool displacements that hold the tendons at their tensions: `rest + feed - N`, `N` the
-/// unstretched length the equilibrium needs (model-core's slack with no slack; `rest` is the
-/// termination's arc length).
+/// The spool displacements that hold the tendons at their tensions (model-core's
+/// `Tendons::displacements_holding_m`: home length minus the unstretched length the equilibrium
+/// needs).
 pub fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
-    tendons
-        .tendons()
-        .iter()
-        .zip(&solved.unstretched_m)
-        .enumerate()
-        .map(|(j, (t, needed))| {
-            let rest = tendons.rest_length_m(j).unwrap_or(0.0);
-            rest + t.feed_length_m - needed
-        })
-        .collect()
+    tendons.displacements_holding_m(solved).to_vec()
 }
 
 /// The passive cables' lengths on a tendon equilibrium (model-core's tendon solve measures only the

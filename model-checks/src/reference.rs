@@ -309,6 +309,24 @@ pub fn tendon_two_section<T: Scalar>(
     ))
 }
 
+/// Ticks of [`tendon_two_section_actuation_n`].
+pub const TENDON_TWO_SECTION_TICKS: usize = 12;
+
+/// An actuation of the golden two-section robot ([`tendon_two_section`]) for warm updates: the
+/// tensions at `tick`, N. The proximal section bends one way and turns while the distal one bends
+/// the other way; every tendon stays above 0.2 N (taut), each moves by at most 0.1 N a tick.
+pub fn tendon_two_section_actuation_n(tick: usize) -> [f64; 6] {
+    let k = tick as f64;
+    [
+        1.0 + 0.1 * k,
+        0.5 + 0.05 * k,
+        0.2,
+        0.2 + 0.05 * k,
+        1.5 - 0.1 * k,
+        0.3,
+    ]
+}
+
 /// One straight 0.2 m rod of 1.4 mm Nitinol (54 GPa), no gravity, `guides` evenly spaced point
 /// guides (the last at the tip) and one tendon at 1 cm along body x ending at the tip: the golden
 /// `tendon_dense_limit.csv` at 100 guides.

@@ -43,7 +43,8 @@ pub(crate) struct NewtonOptions<T> {
     /// precision), or the tolerance is absolute and only the residual ends it (a projection back onto
     /// the equilibrium, to a tolerance far above rounding).
     pub to_rounding: bool,
-    /// Trust region: largest change of the unknowns per iteration, as a base rotation, rad.
+    /// Trust region: largest change of the unknowns per iteration, as a base rotation, rad
+    /// ([`RodOde::change_rad`]; chord steps bound the unknowns themselves).
     pub max_step_rad: T,
     /// Iterations (each one trial sweep).
     pub max_iterations: u16,
@@ -247,7 +248,6 @@ where
     let tolerance = options.tolerance;
     let converged = |sw: &Sweep<T, K>, x: &SVector<T, K>| converged(ode, sw, x, options);
     let mut residual = ode.residual_size(&sw.residual);
-    let max_step = options.max_step_rad / length;
     let mut mu = T::zero();
     let mut rejections = 0u8;
     for _ in 0..options.max_iterations {
@@ -290,9 +290,12 @@ where
         if at_floor && stopping::tip_move_negligible(tip_move, length, tolerance) {
             return (residual, Termination::Converged);
         }
-        let norm = step.norm();
-        if norm > max_step {
-            step *= max_step / norm;
+        // The trust region, measured by how far the step moves the shape (`RodOde::change_rad`:
+        // the base rotation for most equations; a tendon-driven rod's base force counted by the
+        // turn its chords make, MODEL.md §6.5).
+        let change = ode.change_rad(&step);
+        if change > options.max_step_rad {
+            step *= options.max_step_rad / change;
         }
         work.iterations = work.iterations.saturating_add(1);
         let trial_x = *x + step;

@@ -156,6 +156,10 @@ const CHORD_REACH: f64 = 16.0;
 /// to its iteration limit; it feeds that inverse's gradient, the base's only starts.)
 const SECANT_FLOOR: f64 = 64.0;
 
+/// How far above the rounding floor a step must end for its slow gain to difference the
+/// sensitivity afresh: closer, no sensitivity can show a gain of four.
+const REDIFFERENCE_FLOOR: f64 = 4.0;
+
 /// Newton iterations of the forward solve a joint step starts (`joint_step.rs`): from a tracking
 /// start it converges in one or two.
 const JOINT_ITERATIONS: u16 = 3;
@@ -237,6 +241,21 @@ impl<T: Scalar> Tendons<T> {
             *phi = self.home_length_m(j) - *d - *needed;
         }
         out
+    }
+
+    /// The spool displacements, m (positive taken in), that hold the tendons of `solved` at its
+    /// tensions with no slack: each tendon's home length (feed and rest path) minus the
+    /// unstretched length the equilibrium needs. What a displacement-controlled solve of them gives
+    /// back (the round trip from tensions); empty when `solved` did not succeed (it has no
+    /// unstretched lengths).
+    pub fn displacements_holding_m(&self, solved: &TendonEquilibrium<T>) -> Vec<T, MAX_TENDONS> {
+        solved
+            .unstretched_m
+            .iter()
+            .take(self.len())
+            .enumerate()
+            .map(|(j, needed)| self.home_length_m(j) - *needed)
+            .collect()
     }
 
     /// Each tendon's capstan exponent per radian (zero beyond the last tendon).
@@ -426,7 +445,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 termination = current.equilibrium.report.termination;
                 break;
             }
-            let (r, parts, _) = residual_of(&current, &tau);
+            let (r, parts, phi) = residual_of(&current, &tau);
             let size = r.amax();
             if size <= floor {
                 termination = Termination::Converged;
@@ -449,7 +468,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     }
                 },
             };
-            let Some(step) = fb.newton_step((&r, &parts), &s) else {
+            // A warm update's first step (the tick's) solves the complementarity linearised with
+            // the carried sensitivity exactly (Josephy-Newton, as the joint step does): where the
+            // tick's start is beyond a tracking step the joint step declines, and the semi-smooth
+            // step on `FB` lands off where `FB` is curved: along a section's common tension, which
+            // only stretches the tendons and compresses the backbone, the two-section robot's
+            // first steps overshot by 0.17 N a tick that moved 0.1 N. Refining steps and cold
+            // solves keep the semi-smooth step (MODEL.md §6.3).
+            let step = if same && iterations == 1 {
+                fb.josephy_step(&tau, &phi, (&r, &parts), &s)
+            } else {
+                fb.newton_step((&r, &parts), &s)
+            };
+            let Some(step) = step else {
                 termination = Termination::Singular;
                 break;
             };
@@ -538,8 +569,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     // A carried sensitivity that gained less than a factor four is differenced
                     // afresh next time: Broyden's secants alone converge slowly near the answer,
                     // and differencing costs a forward solve per tendon, a Broyden step one. Not
-                    // when the step reached the rounding floor: there is no gain left to see.
-                    let slow = !fresh && r_new > size * T::lit(0.25) && r_new > floor;
+                    // within four times the rounding floor: there, a fresh sensitivity could not
+                    // gain a factor four either (on the two-section robot in f32 most ticks ended
+                    // on a step to twice the floor and differenced six tendons afresh).
+                    let slow = !fresh
+                        && r_new > size * T::lit(0.25)
+                        && r_new > floor * T::lit(REDIFFERENCE_FLOOR);
                     // Broyden: the secant along the step taken.
                     let dn = SVector::<T, MAX_TENDONS>::from_fn(|j, _| {
                         match (moved.unstretched_m.get(j), current.unstretched_m.get(j)) {

@@ -102,7 +102,10 @@ impl<T: Scalar> Complementarity<'_, T> {
     }
 
     /// Josephy-Newton's step from `tau` (each at least zero) where the slack is `phi`, else
-    /// (no pivoting answer) [`Complementarity::newton_step`].
+    /// (no pivoting answer) [`Complementarity::newton_step`]. Out of line: the pivoting's
+    /// matrices stay out of its callers' frames (the displacement solve's is the tendon image's
+    /// deepest).
+    #[inline(never)]
     pub(super) fn josephy_step(
         &self,
         tau: &[T; MAX_TENDONS],
