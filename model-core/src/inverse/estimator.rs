@@ -19,8 +19,9 @@ use crate::solve::newton::Work;
 use crate::stability::Stability;
 
 /// The largest load step, in buckling scales (`E I / L^2` of force), taken on a plain sweep (a
-/// chord step): the steps of a tracking update are a few hundredths (the bench's path, 8 mN a
-/// tick: about 0.01); a jump of the data (slack paid out at once) takes Newton steps.
+/// chord step): the chord step after a tracking update's predictor is a few thousandths (on the
+/// bench's path, whose load moves 5-8 mN a tick, 0.045-0.067 buckling scales of 0.12 N); a jump
+/// of the data (slack paid out at once) takes Newton steps.
 const CHORD_STEP: f64 = 0.05;
 
 /// Settings of the warm-started [`Estimator`].

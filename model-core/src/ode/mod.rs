@@ -217,9 +217,10 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
         x.norm() * self.length_m()
     }
 
-    /// How far a change `dx` of the unknowns moves the rod, rad: the load continuation's bound on
-    /// a step's answer against its prediction, and the size of its first step (the base strain's
-    /// `|dx| L` unless the unknowns hold more than a rotation).
+    /// How far a change `dx` of the unknowns moves the rod, rad: Newton's trust region, the load
+    /// continuation's bound on a step's answer against its prediction, and the size of its first
+    /// step (the base strain's `|dx| L` unless the unknowns hold more than a rotation). Chord
+    /// steps (`solve/newton.rs`) bound `|dx| L` itself.
     #[inline]
     fn change_rad(&self, dx: &SVector<T, K>) -> T {
         dx.norm() * self.length_m()

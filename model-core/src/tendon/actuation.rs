@@ -247,12 +247,14 @@ impl<T: Scalar> Tendons<T> {
     /// tensions with no slack: each tendon's home length (feed and rest path) minus the
     /// unstretched length the equilibrium needs. What a displacement-controlled solve of them gives
     /// back (the round trip from tensions); empty when `solved` did not succeed (it has no
-    /// unstretched lengths).
+    /// unstretched lengths) or has another number of tendons.
     pub fn displacements_holding_m(&self, solved: &TendonEquilibrium<T>) -> Vec<T, MAX_TENDONS> {
+        if solved.unstretched_m.len() != self.len() {
+            return Vec::new();
+        }
         solved
             .unstretched_m
             .iter()
-            .take(self.len())
             .enumerate()
             .map(|(j, needed)| self.home_length_m(j) - *needed)
             .collect()
@@ -473,8 +475,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             // tick's start is beyond a tracking step the joint step declines, and the semi-smooth
             // step on `FB` lands off where `FB` is curved: along a section's common tension, which
             // only stretches the tendons and compresses the backbone, the two-section robot's
-            // first steps overshot by 0.17 N a tick that moved 0.1 N. Refining steps and cold
-            // solves keep the semi-smooth step (MODEL.md §6.3).
+            // first steps overshot by 0.17 N a tick that moved 0.1 N. Refining steps, a retry
+            // after a first step the carried sensitivity misled, and cold solves keep the
+            // semi-smooth step (MODEL.md §6.3).
             let step = if same && iterations == 1 {
                 fb.josephy_step(&tau, &phi, (&r, &parts), &s)
             } else {

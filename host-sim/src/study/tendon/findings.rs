@@ -450,8 +450,9 @@ fn mcu_paragraph(study: &TendonStudy) -> String {
     };
     format!(
         "**Cortex-M4F** (the firmware's tendon robot, f32 discrete guides at {} steps per section, \
-         QEMU instruction counts): {}.{agreement} Instruction counts exist only for this robot: the \
-         firmware bench has no two-section case.",
+         QEMU instruction counts): {}.{agreement} The firmware bench's two-section, six-tendon \
+         cases (`two_section_*`, along their own actuation) are not joined here: \
+         `report/warm_path_options.md` has them.",
         m.steps_per_section,
         join(&cases)
     )
