@@ -715,6 +715,81 @@ fn tendon_warm_updates_after_large_moves_match_cold_solves() {
     }
 }
 
+/// Warm updates from an answer with every tendon slack (all paid out: the rod hangs under gravity
+/// alone) and back to one, in `T`: each gives what a cold solve of its displacements gives
+/// (states, tensions within `tension_tol_n`, tip within `tip_tol_m`). The warm path's start then
+/// has no taut tendon to carry a sensitivity along: it must not return its start, or a tension on
+/// a tendon that cannot pull, as an answer.
+fn tendon_warm_updates_through_all_slack<T: Scalar>(tension_tol_n: f64, tip_tol_m: f64) {
+    let (rod, tendons) = reference::tendon_bench::<T>(20).unwrap();
+    let (model, set) = with_steel_tendons(rod, tendons);
+    let zero = TipLoad::zero();
+    let control = Default::default();
+    let cold = |d: &[f64; 3]| {
+        let d = d.map(T::lit);
+        model
+            .solve_displacements(&set, &d, &zero, None, &settings(), &control)
+            .unwrap()
+    };
+    let all_slack = [-5e-3, -5e-3, -5e-3];
+    let slack = cold(&all_slack);
+    assert!(slack.is_success(), "{:?}", slack.termination);
+    assert!(
+        slack.states.iter().all(|s| *s == TendonState::Slack),
+        "{:?} {:?}",
+        slack.states,
+        slack.solved.tensions_n
+    );
+    assert!(slack.solved.tensions_n.iter().all(|t| *t == T::zero()));
+    let taut = cold(&[0.3e-3, 0.2e-3, -0.05e-3]);
+    assert!(taut.is_success(), "{:?}", taut.termination);
+    // From all slack: one tendon taken in, two, the loop's start, all paid out further; then from
+    // taut tendons back to all slack.
+    let moves: [(&DisplacementSolve<T>, [f64; 3]); 5] = [
+        (&slack, [0.3e-3, -5e-3, -5e-3]),
+        (&slack, [0.3e-3, 0.2e-3, -5e-3]),
+        (&slack, [0.05e-3, 0.12e-3, -0.05e-3]),
+        (&slack, [-8e-3, -8e-3, -8e-3]),
+        (&taut, all_slack),
+    ];
+    for (k, (previous, d)) in moves.iter().enumerate() {
+        let want = cold(d);
+        let warm = model
+            .update_displacements(&set, &d.map(T::lit), &zero, previous, &settings(), &control)
+            .unwrap();
+        assert!(
+            warm.is_success() && want.is_success(),
+            "move {k}: warm {:?}, cold {:?}",
+            warm.termination,
+            want.termination
+        );
+        assert_eq!(warm.states, want.states, "move {k}");
+        for (a, b) in warm.solved.tensions_n.iter().zip(&want.solved.tensions_n) {
+            let (a, b) = (a.to_f64(), b.to_f64());
+            assert!((a - b).abs() < tension_tol_n, "move {k}: {a} vs {b} N");
+        }
+        let tip = (warm.solved.equilibrium.tip_position_m - want.solved.equilibrium.tip_position_m)
+            .norm()
+            .to_f64();
+        assert!(tip < tip_tol_m, "move {k}: tips {tip:e} m apart");
+    }
+    assert!(
+        cold(&[0.3e-3, -5e-3, -5e-3]).states
+            == [TendonState::Taut, TendonState::Slack, TendonState::Slack],
+        "one tendon taken in from all slack pulls alone"
+    );
+}
+
+#[test]
+fn tendon_warm_updates_through_all_slack_in_f64() {
+    tendon_warm_updates_through_all_slack::<f64>(1e-8, 1e-9);
+}
+
+#[test]
+fn tendon_warm_updates_through_all_slack_in_f32() {
+    tendon_warm_updates_through_all_slack::<f32>(1e-2, 2e-5);
+}
+
 /// A tendon paid out beyond its path goes slack: zero tension, never negative, and its slack is
 /// what was paid out beyond the path of the taut solution.
 #[test]

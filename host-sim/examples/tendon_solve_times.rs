@@ -16,7 +16,6 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use host_sim::run::spool_displacements;
 use host_sim::scene::{Scene, SceneError};
 use model_core::{
     DisplacementSettings, Model, ShootingSettings, TendonEquilibrium, Tendons, TipLoad,
@@ -92,7 +91,7 @@ fn main() -> Result<(), SceneError> {
         .solve_tendons(&fine_tendons, &tensions, &load, None, &settings)
         .map_err(refused("reference"))?;
     let reference_tip = reference.equilibrium.tip_position_m;
-    let target = spool_displacements(&fine_tendons, &reference);
+    let target = fine_tendons.displacements_holding_m(&reference);
 
     let lighter: Vec<f64> = tensions.iter().map(|t| t * 0.95).collect();
     let previous = model
@@ -101,7 +100,7 @@ fn main() -> Result<(), SceneError> {
     let previous_displacement = model
         .solve_displacements(
             &tendons,
-            &spool_displacements(&tendons, &previous),
+            &tendons.displacements_holding_m(&previous),
             &load,
             None,
             &settings,

@@ -732,7 +732,7 @@ impl WithModel for TendonSolve<'_> {
             (Some(_), false) => out.displacements_m = given,
             (None, true) => {
                 out.tensions_n = given;
-                out.displacements_m = Some(spool_displacements(&tendons, &solved));
+                out.displacements_m = Some(tendons.displacements_holding_m(&solved).to_vec());
                 out.states = Some(
                     solved
                         .tensions_n
@@ -824,13 +824,6 @@ fn tendon_shape<A: Attitude<f64>>(
         .map_err(|e| SceneError::new("output", e.to_string()))?;
     points.truncate(written);
     Ok(points)
-}
-
-/// The spool displacements that hold the tendons at their tensions (model-core's
-/// `Tendons::displacements_holding_m`: home length minus the unstretched length the equilibrium
-/// needs).
-pub fn spool_displacements(tendons: &Tendons<f64>, solved: &TendonEquilibrium<f64>) -> Vec<f64> {
-    tendons.displacements_holding_m(solved).to_vec()
 }
 
 /// The passive cables' lengths on a tendon equilibrium (model-core's tendon solve measures only the

@@ -15,10 +15,7 @@ use model_core::{
 use serde::Serialize;
 
 use super::figure::{FigureSpec, figure};
-use super::{
-    Point, Report, Status, WithModel, arr, point, real, spool_displacements, state_name,
-    tendon_shape,
-};
+use super::{Point, Report, Status, WithModel, arr, point, real, state_name, tendon_shape};
 use crate::plots::Figure;
 use crate::scene::{Actuation, Scene, SceneError, TensionMeasurement};
 
@@ -305,7 +302,7 @@ impl TendonInverse<'_> {
         est: &TendonEstimate<f64>,
     ) {
         let d = &self.displacements.values;
-        let predicted = spool_displacements(tendons, &est.solved);
+        let predicted = tendons.displacements_holding_m(&est.solved);
         let slack: Vec<bool> = (0..tendons.len())
             .map(|j| est.states.get(j) == Some(&TendonState::Slack))
             .collect();

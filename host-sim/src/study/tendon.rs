@@ -8,6 +8,7 @@ mod actuation;
 mod cases;
 mod findings;
 mod mcu;
+mod mcu_two_section;
 mod measure;
 mod picker;
 mod write;
@@ -15,6 +16,7 @@ mod write;
 use model_core::reduction::TendonModel;
 
 use super::measure::{REFERENCE_AGREEMENT_M, Row, Timing};
+use super::numbers::sig;
 use super::variants::Arithmetic;
 use super::{Check, check, mark_fronts};
 use host_sim::scene::SceneError;
@@ -22,6 +24,7 @@ use host_sim::scene::SceneError;
 pub use actuation::ActuationRow;
 pub use cases::TendonScene;
 pub use mcu::TendonMcu;
+pub use mcu_two_section::TwoSectionMcu;
 pub use measure::{CHECK_STEPS, GOLDEN_AGREEMENT_M, REFERENCE_STEPS, TendonReference};
 pub use picker::TendonPick;
 pub use write::{markdown, plot};
@@ -55,6 +58,8 @@ pub struct TendonStudy {
     pub picks: Vec<TendonPick>,
     /// The MCU join.
     pub mcu: TendonMcu,
+    /// The two-section robot's MCU join.
+    pub two_section_mcu: TwoSectionMcu,
 }
 
 /// The keys of the tendon scenes.
@@ -132,6 +137,8 @@ pub fn run(quick: bool, keys: &[String], timing: Timing) -> Result<TendonStudy, 
     mark_fronts(&mut rows);
     let mcu = mcu::study(timing)?;
     eprintln!("tendon MCU join: {} cases", mcu.rows.len());
+    let two_section_mcu = mcu_two_section::study(timing)?;
+    eprintln!("two-section MCU join: {} cases", two_section_mcu.rows.len());
     Ok(TendonStudy {
         steps,
         scenes,
@@ -139,6 +146,7 @@ pub fn run(quick: bool, keys: &[String], timing: Timing) -> Result<TendonStudy, 
         actuation: actuation_rows,
         picks,
         mcu,
+        two_section_mcu,
     })
 }
 
@@ -272,6 +280,27 @@ pub fn checks(study: &TendonStudy) -> Vec<Check> {
             format!(
                 "tendon MCU join, {}: QEMU and host f32 solves converged",
                 r.qemu.case
+            ),
+        );
+    }
+    for r in &study.two_section_mcu.rows {
+        check(
+            &mut out,
+            r.qemu.converged
+                && r.host_converged
+                && r.qemu.tip_error_m <= mcu_two_section::F32_TIP_AGREEMENT_M
+                && r.f32_tip_m <= mcu_two_section::F32_TIP_AGREEMENT_M
+                && r.f64_tip_m <= mcu_two_section::F64_TIP_AGREEMENT_M,
+            format!(
+                "two-section MCU join, {}: QEMU's and the host's f32 and f64 solves converged, \
+                 their tips within {} / {} / {} um of the tick's forward solve (limits {:.0e} m in \
+                 f32, {:.0e} m in f64)",
+                r.qemu.case,
+                sig(r.qemu.tip_error_m * 1e6),
+                sig(r.f32_tip_m * 1e6),
+                sig(r.f64_tip_m * 1e6),
+                mcu_two_section::F32_TIP_AGREEMENT_M,
+                mcu_two_section::F64_TIP_AGREEMENT_M
             ),
         );
     }

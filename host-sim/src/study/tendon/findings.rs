@@ -450,12 +450,76 @@ fn mcu_paragraph(study: &TendonStudy) -> String {
     };
     format!(
         "**Cortex-M4F** (the firmware's tendon robot, f32 discrete guides at {} steps per section, \
-         QEMU instruction counts): {}.{agreement} The firmware bench's two-section, six-tendon \
-         cases (`two_section_*`, along their own actuation) are not joined here: \
-         `report/warm_path_options.md` has them.",
+         QEMU instruction counts): {}.{agreement} {}",
         m.steps_per_section,
-        join(&cases)
+        join(&cases),
+        two_section_sentence(study)
     )
+}
+
+/// The two-section robot's MCU cases in one sentence.
+fn two_section_sentence(study: &TendonStudy) -> String {
+    let m = &study.two_section_mcu;
+    let cases: Vec<String> = m
+        .rows
+        .iter()
+        .map(|r| {
+            let q = &r.qemu;
+            format!(
+                "{} {} instructions ({} sweeps; {:.1} ms at 168 MHz; host f32 {} sweeps, f64 {})",
+                q.case,
+                q.instructions,
+                q.sweeps,
+                q.instructions as f64 / 168e3,
+                r.host_sweeps,
+                r.host_f64_sweeps
+            )
+        })
+        .collect();
+    let worst_tip = m
+        .rows
+        .iter()
+        .map(|r| r.qemu.tip_error_m.max(r.f32_tip_m))
+        .fold(0.0, f64::max);
+    format!(
+        "The two-section, six-tendon robot (its own table, {} ticks, {} steps per section): {}; \
+         every f32 tip within {} um of the forward solve whose displacements its tick used. Its \
+         warm update is {} to {} times the bench robot's median tick.",
+        m.ticks,
+        m.steps_per_section,
+        join(&cases),
+        sig(worst_tip * 1e6),
+        ratio(
+            study,
+            "two_section_update_warm_median",
+            "tendon_update_warm_median"
+        ),
+        ratio(
+            study,
+            "two_section_update_warm",
+            "tendon_update_warm_median"
+        ),
+    )
+}
+
+/// QEMU's instructions of the two-section case `two` over the bench robot's case `bench`.
+fn ratio(study: &TendonStudy, two: &str, bench: &str) -> String {
+    let two = study
+        .two_section_mcu
+        .rows
+        .iter()
+        .find(|r| r.qemu.case == two)
+        .map(|r| r.qemu.instructions as f64);
+    let bench = study
+        .mcu
+        .rows
+        .iter()
+        .find(|r| r.qemu.case == bench)
+        .map(|r| r.qemu.instructions as f64);
+    match (two, bench) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.0}", a / b),
+        _ => "n/a".into(),
+    }
 }
 
 fn picker_paragraph(study: &TendonStudy) -> String {

@@ -104,7 +104,7 @@ pub fn trajectory(text: &str) -> Result<Vec<Tick>, SceneError> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct QemuTendon {
     /// `tendon_forward_cold`, `tendon_displacement_cold`, `tendon_update_warm` or
-    /// `tendon_update_warm_median`.
+    /// `tendon_update_warm_median` (or the same of `two_section_`).
     pub case: String,
     /// Steps per section.
     pub steps_per_section: u16,
@@ -116,14 +116,22 @@ pub struct QemuTendon {
     pub sweeps: u32,
     /// Whether it converged (the warm update: every tick).
     pub converged: bool,
-    /// The firmware's tip error against its f64 trajectory at the same steps, m.
+    /// The firmware's tip error, m: against its f64 trajectory at the same steps (`tendon_`), or
+    /// against the tick's own forward solve (`two_section_`).
     pub tip_error_m: f64,
 }
 
 /// The firmware bench's tendon cases.
 pub fn qemu_tendon_cases(text: &str) -> Result<Vec<QemuTendon>, SceneError> {
+    qemu_cases(text, "tendon_", &CASES)
+}
+
+/// The firmware bench's cases whose names start with `prefix`; every one of `cases` must be there,
+/// all at one step count.
+pub fn qemu_cases(text: &str, prefix: &str, cases: &[&str]) -> Result<Vec<QemuTendon>, SceneError> {
     let mut out = Vec::new();
-    for line in text.lines().filter(|l| l.starts_with("bench case=tendon_")) {
+    let start = format!("bench case={prefix}");
+    for line in text.lines().filter(|l| l.starts_with(&start)) {
         let f = fields(line);
         let nm: f64 = number(&f, "tip_error_nm")?;
         out.push(QemuTendon {
@@ -136,8 +144,8 @@ pub fn qemu_tendon_cases(text: &str) -> Result<Vec<QemuTendon>, SceneError> {
             tip_error_m: nm * 1e-9,
         });
     }
-    for want in CASES {
-        if !out.iter().any(|c| c.case == want) {
+    for want in cases {
+        if !out.iter().any(|c| c.case == *want) {
             return Err(bench_error(format!("no {want} line")));
         }
     }
@@ -145,7 +153,9 @@ pub fn qemu_tendon_cases(text: &str) -> Result<Vec<QemuTendon>, SceneError> {
         .iter()
         .any(|c| c.steps_per_section != out.first().map_or(0, |f| f.steps_per_section))
     {
-        return Err(bench_error("tendon cases at different step counts"));
+        return Err(bench_error(format!(
+            "{prefix}cases at different step counts"
+        )));
     }
     Ok(out)
 }
@@ -238,7 +248,8 @@ pub fn firmware_scene(ticks: &[Tick]) -> Result<TendonScene, SceneError> {
     })
 }
 
-fn solved<T: Scalar>(eq: &TendonEquilibrium<T>, sweeps: u32, time: f64, ok: bool) -> HostSolve {
+/// One solve's record: its sweeps, time, whether it is an answer, its tip and tensions.
+pub fn solved<T: Scalar>(eq: &TendonEquilibrium<T>, sweeps: u32, time: f64, ok: bool) -> HostSolve {
     HostSolve {
         sweeps,
         host_time_us: time,

@@ -252,6 +252,44 @@ fn mcu_table(out: &mut String, study: &TendonStudy) {
     out.push('\n');
 }
 
+fn two_section_mcu_table(out: &mut String, study: &TendonStudy) {
+    let m = &study.two_section_mcu;
+    let _ = writeln!(
+        out,
+        "`two-section`: the two-section, six-tendon robot of `tendon-two-section` (gravity) with \
+         the firmware robot's steel tendons behind its feed, along {} ticks of tensions moving by \
+         at most 0.1 N a tick, every tendon taut (`model_checks::reference::\
+         tendon_two_section_actuation_n`). The firmware's `bench` image built with its \
+         `two-section-bench` feature, on QEMU (f32, {} steps per section); the host takes the same \
+         path in f32 and f64. Each tick's displacements are those that hold a forward solve at its \
+         tensions (in the path's own precision), and the tips are against that solve: what the \
+         update must find.\n\n\
+         | case | instructions | sweeps (QEMU / host f32 / host f64) | instructions per sweep | ms at 168 MHz, lower bound | host f32, us | host f64, us | tip from the tick's forward solve (QEMU / host f32 / host f64), um |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        m.ticks, m.steps_per_section
+    );
+    for r in &m.rows {
+        let q = &r.qemu;
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} / {} / {} | {:.0} | {:.1} | {} | {} | {} / {} / {} |",
+            q.case,
+            q.instructions,
+            q.sweeps,
+            r.host_sweeps,
+            r.host_f64_sweeps,
+            q.instructions as f64 / f64::from(q.sweeps.max(1)),
+            q.instructions as f64 / 168e3,
+            us(r.host_f32_us),
+            us(r.host_f64_us),
+            sig(q.tip_error_m * 1e6),
+            sig(r.f32_tip_m * 1e6),
+            sig(r.f64_tip_m * 1e6),
+        );
+    }
+    out.push('\n');
+}
+
 fn picker_table(out: &mut String, study: &TendonStudy) {
     let _ = writeln!(
         out,
@@ -322,6 +360,7 @@ pub fn markdown(study: &TendonStudy) -> String {
     scene_tables(&mut out, study);
     actuation_table(&mut out, study);
     mcu_table(&mut out, study);
+    two_section_mcu_table(&mut out, study);
     picker_table(&mut out, study);
     out
 }
