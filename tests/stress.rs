@@ -616,8 +616,9 @@ fn heavy_loads_converge_directly_from_the_bent_rods_guess() {
 /// A chain of solves, each from the last answer as a neighbour ([`Start::Neighbour`]: secant steps
 /// on plain sweeps, then one sweep with the tangents for the stability test), in 1 % load steps
 /// from 10 to 300 g, straight down and 60 degrees out of plane, at 12 and 40 steps: every answer
-/// verified, within 1e-9 m of the cold solve's, in at most 6 sweeps (a third of them in 4), and
-/// carrying its Jacobian to the next. (The warm start from the base strain alone takes 3-4 sweeps, all with the tangents.)
+/// verified, within 1e-9 m of the cold solve's, in at most 6 sweeps (at least a third of them in
+/// 4), and carrying its Jacobian to the next. (The warm start from the base strain alone takes 3-4
+/// sweeps, all with the tangents.)
 #[test]
 fn a_chain_of_neighbour_starts_in_one_percent_steps() {
     let settings = ShootingSettings::default();

@@ -210,14 +210,16 @@ impl HostPath {
         Some((time, sweeps))
     }
 
-    /// The median warm update by host time (the upper one of an even count), and its sweeps.
+    /// The median warm update (the upper one of an even count), its host time and sweeps: ordered
+    /// by sweeps, which are deterministic (the firmware orders its ticks by instructions, which
+    /// follow the sweeps), ties by host time.
     pub fn median_warm(&self) -> Option<(f64, u32)> {
         let mut warm: Vec<(f64, u32)> = self
             .warm()
             .iter()
             .map(|t| (t.host_time_us, t.sweeps))
             .collect();
-        warm.sort_by(|a, b| a.0.total_cmp(&b.0));
+        warm.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.total_cmp(&b.0)));
         warm.get(warm.len() / 2).copied()
     }
 }

@@ -132,7 +132,9 @@ fn path<T: Scalar>(steps: u16, timing: Timing) -> Result<Path, SceneError> {
             .norm()
             .to_f64();
         tip_m.push(tip);
-        ticks.push(solved(&out.solved, out.sweeps, us, out.is_success()));
+        // As the firmware: a tick counts as converged when its forward solve did too.
+        let ok = out.is_success() && held.is_success();
+        ticks.push(solved(&out.solved, out.sweeps, us, ok));
         truth = Some(held);
         previous = Some(out);
     }
