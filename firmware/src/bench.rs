@@ -220,10 +220,9 @@ pub fn run(
                     ..estimator_settings
                 },
             )?;
-            let mut worst = Worst::default();
-            let mut costs = [(0u64, 0u16); WARM_TICKS];
+            let mut ticks = WarmTicks::<WARM_TICKS>::new();
             let mut start = Start::Warm(reference.base_strain_per_m);
-            for (tick, slot) in (1..=WARM_TICKS).zip(costs.iter_mut()) {
+            for tick in 1..=WARM_TICKS {
                 let truth = model.solve(&TipLoad::force(force(tick)), start, &settings)?;
                 start = Start::Warm(truth.base_strain_per_m);
                 let measured = lengths(&truth);
@@ -234,33 +233,29 @@ pub fn run(
                 let done = estimate.report.termination == Termination::Converged
                     || (max_sweeps == 1
                         && estimate.report.termination == Termination::IterationLimit);
-                *slot = (cost, estimate.report.sweeps);
-                worst.add(
+                ticks.add(
                     cost,
-                    estimate.report.sweeps,
+                    u32::from(estimate.report.sweeps),
                     done,
                     (estimate.tip_position_m - truth.tip_position_m).norm(),
                 );
             }
-            report(&line(
+            // The typical tick of the converging update: the median cost (and its sweeps).
+            let median = (case == "update_warm").then_some("update_warm_median");
+            ticks.report(
                 case,
-                worst.cost,
-                worst.sweeps,
-                worst.all_done,
-                worst.tip_error_m,
-            ));
-            if case == "update_warm" {
-                // The typical tick: the median cost (and that tick's sweeps).
-                costs.sort_unstable();
-                let (cost, sweeps) = costs.get(WARM_TICKS / 2).copied().unwrap_or_default();
-                report(&line(
-                    "update_warm_median",
-                    cost,
-                    sweeps,
-                    worst.all_done,
-                    worst.tip_error_m,
-                ));
-            }
+                median,
+                &|c, cost, sweeps, done, error| {
+                    line(
+                        c,
+                        cost,
+                        u16::try_from(sweeps).unwrap_or(u16::MAX),
+                        done,
+                        error,
+                    )
+                },
+                report,
+            );
         }
     }
     tendon_cases(measure, report)?;
@@ -313,9 +308,7 @@ fn tendon_cases(
     ));
 
     let mut previous: Option<DisplacementSolve<f32>> = None;
-    let mut worst = Worst::default();
-    let mut worst_sweeps = 0u32;
-    let mut costs = [(0u64, 0u32); TRAJECTORY.len() - 1];
+    let mut ticks = WarmTicks::<{ TRAJECTORY.len() - 1 }>::new();
     for tick in 0..TRAJECTORY.len() {
         let d = displacements_m(tick).map(|x| x as f32);
         let mut out = None;
@@ -338,19 +331,13 @@ fn tendon_cases(
                 error,
             ));
         } else {
-            worst.add(cost, 0, out.is_success(), error);
-            worst_sweeps = worst_sweeps.max(out.sweeps);
-            if let Some(slot) = costs.get_mut(tick - 1) {
-                *slot = (cost, out.sweeps);
-            }
+            ticks.add(cost, out.sweeps, out.is_success(), error);
         }
         previous = Some(out);
     }
-    report_warm(
-        ["tendon_update_warm", "tendon_update_warm_median"],
-        &worst,
-        worst_sweeps,
-        &mut costs,
+    ticks.report(
+        "tendon_update_warm",
+        Some("tendon_update_warm_median"),
         &line,
         report,
     );
@@ -407,9 +394,7 @@ fn two_section_cases(
 
     let mut truth: Option<TendonEquilibrium<f32>> = None;
     let mut previous: Option<DisplacementSolve<f32>> = None;
-    let mut worst = Worst::default();
-    let mut worst_sweeps = 0u32;
-    let mut costs = [(0u64, 0u32); TENDON_TWO_SECTION_TICKS - 1];
+    let mut ticks = WarmTicks::<{ TENDON_TWO_SECTION_TICKS - 1 }>::new();
     for tick in 0..TENDON_TWO_SECTION_TICKS {
         let tensions = tendon_two_section_actuation_n(tick).map(|t| t as f32);
         let mut forward = None;
@@ -446,82 +431,75 @@ fn two_section_cases(
                 error,
             ));
         } else {
-            worst.add(cost, 0, out.is_success() && forward.is_success(), error);
-            worst_sweeps = worst_sweeps.max(out.sweeps);
-            if let Some(slot) = costs.get_mut(tick - 1) {
-                *slot = (cost, out.sweeps);
-            }
+            ticks.add(
+                cost,
+                out.sweeps,
+                out.is_success() && forward.is_success(),
+                error,
+            );
         }
         truth = Some(forward);
         previous = Some(out);
     }
-    report_warm(
-        ["two_section_update_warm", "two_section_update_warm_median"],
-        &worst,
-        worst_sweeps,
-        &mut costs,
+    ticks.report(
+        "two_section_update_warm",
+        Some("two_section_update_warm_median"),
         &line,
         report,
     );
     Ok(())
 }
 
-/// A tendon robot's warm updates as two lines, `cases`: the costliest (with the most sweeps of any
-/// tick, every tick's convergence and the worst tip error) and the median tick (its cost and
-/// sweeps); `costs` (cost, sweeps) of every tick, sorted here.
-fn report_warm(
-    cases: [&'static str; 2],
-    worst: &Worst,
-    worst_sweeps: u32,
-    costs: &mut [(u64, u32)],
-    line: &dyn Fn(&'static str, u64, u32, bool, f32) -> BenchLine,
-    report: &mut dyn FnMut(&BenchLine),
-) {
-    let [costliest, median] = cases;
-    report(&line(
-        costliest,
-        worst.cost,
-        worst_sweeps,
-        worst.all_done,
-        worst.tip_error_m,
-    ));
-    costs.sort_unstable();
-    let (cost, sweeps) = costs.get(costs.len() / 2).copied().unwrap_or_default();
-    report(&line(
-        median,
-        cost,
-        sweeps,
-        worst.all_done,
-        worst.tip_error_m,
-    ));
-}
-
-/// The worst of a series of updates.
-#[derive(Debug)]
-struct Worst {
-    cost: u64,
-    sweeps: u16,
+/// The warm updates along one path, for their lines: the costliest tick's cost with the most
+/// sweeps of any tick, and the median tick's cost with that tick's sweeps; both with whether every
+/// tick was an answer and the worst tip error.
+struct WarmTicks<const N: usize> {
+    /// (cost, sweeps) of each tick added.
+    ticks: [(u64, u32); N],
+    added: usize,
     all_done: bool,
     tip_error_m: f32,
 }
 
-impl Default for Worst {
-    fn default() -> Self {
+impl<const N: usize> WarmTicks<N> {
+    fn new() -> Self {
         Self {
-            cost: 0,
-            sweeps: 0,
+            ticks: [(0, 0); N],
+            added: 0,
             all_done: true,
             tip_error_m: 0.0,
         }
     }
-}
 
-impl Worst {
-    fn add(&mut self, cost: u64, sweeps: u16, done: bool, tip_error_m: f32) {
-        self.cost = self.cost.max(cost);
-        self.sweeps = self.sweeps.max(sweeps);
+    /// One tick: its cost, sweeps, whether it is an answer and its tip error (beyond `N` ticks its
+    /// cost and sweeps are not kept).
+    fn add(&mut self, cost: u64, sweeps: u32, done: bool, tip_error_m: f32) {
+        if let Some(slot) = self.ticks.get_mut(self.added) {
+            *slot = (cost, sweeps);
+            self.added += 1;
+        }
         self.all_done &= done;
         self.tip_error_m = self.tip_error_m.max(tip_error_m);
+    }
+
+    /// The line `costliest` and, when given, the line `median` (the upper median of an even count).
+    fn report(
+        &mut self,
+        costliest: &'static str,
+        median: Option<&'static str>,
+        line: &dyn Fn(&'static str, u64, u32, bool, f32) -> BenchLine,
+        report: &mut dyn FnMut(&BenchLine),
+    ) {
+        let (done, error) = (self.all_done, self.tip_error_m);
+        let ticks = self.ticks.get_mut(..self.added).unwrap_or(&mut []);
+        let cost = ticks.iter().map(|t| t.0).max().unwrap_or(0);
+        let sweeps = ticks.iter().map(|t| t.1).max().unwrap_or(0);
+        report(&line(costliest, cost, sweeps, done, error));
+        if let Some(median) = median {
+            ticks.sort_unstable();
+            let (cost, sweeps) = ticks.get(ticks.len() / 2).copied().unwrap_or_default();
+            report(&line(median, cost, sweeps, done, error));
+        }
     }
 }
 
