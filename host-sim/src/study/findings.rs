@@ -499,7 +499,7 @@ fn mcu(study: &Study) -> Option<String> {
              lower bound), error {} um",
             r.qemu.steps_per_section,
             r.qemu.cold_instructions,
-            r.qemu.cold_instructions as f64 / 168e3,
+            super::mcu::lower_bound_ms(r.qemu.cold_instructions),
             sig(r.host_f32.error_m().unwrap_or(f64::NAN) * 1e6)
         )
     };

@@ -83,6 +83,13 @@ pub(super) fn number<T: std::str::FromStr>(
         .and_then(|v| v.parse().ok())
         .ok_or_else(|| bench_error(format!("no number {key}")))
 }
+/// The Cortex-M4F's clock (STM32F405), Hz.
+pub const MCU_CLOCK_HZ: f64 = 168e6;
+
+/// Milliseconds `instructions` take at [`MCU_CLOCK_HZ`] if each took one cycle: a lower bound.
+pub fn lower_bound_ms(instructions: u64) -> f64 {
+    instructions as f64 / (MCU_CLOCK_HZ / 1e3)
+}
 
 /// The `sweep` and `forward_cold` cases of `bench.run`, by step count.
 pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {

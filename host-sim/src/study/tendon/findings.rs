@@ -404,8 +404,8 @@ fn mcu_paragraph(study: &TendonStudy) -> String {
                 q.case,
                 q.instructions,
                 q.sweeps,
-                q.instructions as f64 / f64::from(q.sweeps.max(1)),
-                q.instructions as f64 / 168e3,
+                q.per_sweep(),
+                q.lower_bound_ms(),
                 sig(r.f32_error_m * 1e6),
                 q.sweeps,
                 r.host_sweeps
@@ -470,7 +470,7 @@ fn two_section_sentence(study: &TendonStudy) -> String {
                 q.case,
                 q.instructions,
                 q.sweeps,
-                q.instructions as f64 / 168e3,
+                q.lower_bound_ms(),
                 r.host_sweeps,
                 r.host_f64_sweeps
             )

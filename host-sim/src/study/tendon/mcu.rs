@@ -14,7 +14,7 @@ use model_core::reduction::TendonModel;
 use model_core::{DisplacementSolve, Scalar, TendonEquilibrium};
 use nalgebra::Vector3;
 
-use super::super::mcu::{BENCH_RUN, bench_error, fields, number};
+use super::super::mcu::{BENCH_RUN, bench_error, fields, lower_bound_ms, number};
 use super::super::measure::{Timing, time_cases, to_f64};
 use super::actuation::Actuator;
 use super::cases::{Actuation, Robot, TendonScene};
@@ -121,6 +121,18 @@ pub struct QemuTendon {
     pub tip_error_m: f64,
 }
 
+impl QemuTendon {
+    /// Instructions per sweep.
+    pub fn per_sweep(&self) -> f64 {
+        self.instructions as f64 / f64::from(self.sweeps.max(1))
+    }
+
+    /// Milliseconds at the MCU's clock if each instruction took one cycle: a lower bound.
+    pub fn lower_bound_ms(&self) -> f64 {
+        lower_bound_ms(self.instructions)
+    }
+}
+
 /// The firmware bench's tendon cases.
 pub fn qemu_tendon_cases(text: &str) -> Result<Vec<QemuTendon>, SceneError> {
     qemu_cases(text, "tendon_", &CASES)
@@ -208,6 +220,32 @@ impl HostPath {
             .reduce(f64::max)?;
         let sweeps = self.warm().iter().map(|t| t.sweeps).max()?;
         Some((time, sweeps))
+    }
+
+    /// Sweeps, host time and whether it converged, of what the firmware case `case` measures (by
+    /// its name's ending): the cold forward solve, the cold displacement-controlled solve of the
+    /// first tick, the median warm update, or the costliest warm update (with the most sweeps of
+    /// any); the warm ones converged when every warm update did.
+    pub fn case(&self, case: &str) -> (u32, f64, bool) {
+        let none = (0, f64::NAN, false);
+        let warm_ok = self.warm().iter().all(|t| t.converged);
+        if case.ends_with("forward_cold") {
+            (
+                self.forward.sweeps,
+                self.forward.host_time_us,
+                self.forward.converged,
+            )
+        } else if case.ends_with("displacement_cold") {
+            self.ticks
+                .first()
+                .map_or(none, |t| (t.sweeps, t.host_time_us, t.converged))
+        } else if case.ends_with("update_warm_median") {
+            self.median_warm()
+                .map_or(none, |(time, sweeps)| (sweeps, time, warm_ok))
+        } else {
+            self.worst_warm()
+                .map_or(none, |(time, sweeps)| (sweeps, time, warm_ok))
+        }
     }
 
     /// The median warm update (the upper one of an even count), its host time and sweeps: ordered
@@ -397,28 +435,6 @@ pub fn study(timing: Timing) -> Result<TendonMcu, SceneError> {
     let recorded_tips: Vec<Vector3<f64>> = ticks.iter().map(|t| Vector3::from(t.tip_m)).collect();
     let mut rows = Vec::new();
     for q in qemu {
-        let one = |p: &HostPath| -> (u32, f64, bool) {
-            match q.case.as_str() {
-                "tendon_forward_cold" => (
-                    p.forward.sweeps,
-                    p.forward.host_time_us,
-                    p.forward.converged,
-                ),
-                "tendon_displacement_cold" => p.ticks.first().map_or((0, f64::NAN, false), |t| {
-                    (t.sweeps, t.host_time_us, t.converged)
-                }),
-                "tendon_update_warm_median" => p
-                    .median_warm()
-                    .map_or((0, f64::NAN, false), |(time, sweeps)| {
-                        (sweeps, time, p.warm().iter().all(|t| t.converged))
-                    }),
-                _ => p
-                    .worst_warm()
-                    .map_or((0, f64::NAN, false), |(time, sweeps)| {
-                        (sweeps, time, p.warm().iter().all(|t| t.converged))
-                    }),
-            }
-        };
         let error = |p: &HostPath, against: &[Vector3<f64>], forward: &Vector3<f64>| match q
             .case
             .as_str()
@@ -427,8 +443,8 @@ pub fn study(timing: Timing) -> Result<TendonMcu, SceneError> {
             "tendon_displacement_cold" => max_tip(p.ticks.get(..1).unwrap_or(&[]), against),
             _ => max_tip(p.warm(), against.get(1..).unwrap_or(&[])),
         };
-        let (host_sweeps, host_f32_us, host_converged) = one(&narrow);
-        let (_, host_f64_us, _) = one(&wide);
+        let (host_sweeps, host_f32_us, host_converged) = narrow.case(&q.case);
+        let (_, host_f64_us, _) = wide.case(&q.case);
         let first_recorded = recorded_tips.first().copied().unwrap_or_default();
         rows.push(TendonMcuRow {
             host_sweeps,

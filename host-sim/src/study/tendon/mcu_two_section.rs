@@ -147,45 +147,22 @@ fn path<T: Scalar>(steps: u16, timing: Timing) -> Result<Path, SceneError> {
 }
 
 impl Path {
-    /// Sweeps, time, convergence and tip error of what `case` measures.
+    /// Sweeps, time, convergence ([`HostPath::case`]) and tip error of what `case` measures: the
+    /// forward solve's none (it is the truth), the cold displacement solve's at the first tick, a
+    /// warm update's the worst of the later ticks.
     fn case(&self, case: &str) -> (u32, f64, bool, f64) {
-        let p = &self.host;
-        let warm_ok = p.warm().iter().all(|t| t.converged);
-        let warm_tip = self
-            .tip_m
-            .get(1..)
-            .unwrap_or(&[])
-            .iter()
-            .copied()
-            .fold(0.0, f64::max);
-        match case {
-            "two_section_forward_cold" => (
-                p.forward.sweeps,
-                p.forward.host_time_us,
-                p.forward.converged,
-                0.0,
-            ),
-            "two_section_displacement_cold" => {
-                p.ticks.first().map_or((0, f64::NAN, false, f64::NAN), |t| {
-                    (
-                        t.sweeps,
-                        t.host_time_us,
-                        t.converged,
-                        self.tip_m.first().copied().unwrap_or(f64::NAN),
-                    )
-                })
+        let (sweeps, us, converged) = self.host.case(case);
+        let tip = if case.ends_with("forward_cold") {
+            0.0
+        } else if case.ends_with("displacement_cold") {
+            self.tip_m.first().copied().unwrap_or(f64::NAN)
+        } else {
+            match self.tip_m.get(1..) {
+                Some(warm) if !warm.is_empty() => warm.iter().copied().fold(0.0, f64::max),
+                _ => f64::NAN,
             }
-            "two_section_update_warm_median" => p
-                .median_warm()
-                .map_or((0, f64::NAN, false, f64::NAN), |(us, sweeps)| {
-                    (sweeps, us, warm_ok, warm_tip)
-                }),
-            _ => p
-                .worst_warm()
-                .map_or((0, f64::NAN, false, f64::NAN), |(us, sweeps)| {
-                    (sweeps, us, warm_ok, warm_tip)
-                }),
-        }
+        };
+        (sweeps, us, converged, tip)
     }
 }
 
