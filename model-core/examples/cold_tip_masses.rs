@@ -8,11 +8,14 @@
 //! `TOLERANCE` the solver's (default `ShootingSettings::default`'s); with a tolerance, the line
 //! also gives the tip's distance from the default tolerance's answer. `WARM=1` adds two lines per
 //! mass: the solve warm from the answer at a 1 % lighter mass, from its base strain
-//! (`Start::Warm`) and from the neighbour (`Equilibrium::next_start`).
+//! (`Start::Warm`) and from the neighbour (`Equilibrium::next_start`). `PLANAR=1` adds one line per
+//! mass: the planar reduction's cold solve (`PlanarModel`, with its 3D stability sweep), its tip
+//! compared, as every line's, with the 3D solve's at the default tolerance.
 
 use std::time::Instant;
 
 use model_checks::reference;
+use model_core::planar::PlanarModel;
 use model_core::rod::{GuideMass, Rod, Section};
 use model_core::{Model, ModelError, ShootingSettings, Start, TipLoad};
 use nalgebra::Vector3;
@@ -44,6 +47,7 @@ fn main() -> Result<(), ModelError> {
         ..tight
     };
     let warm = env::<u8>("WARM").is_some_and(|w| w != 0);
+    let planar = env::<u8>("PLANAR").is_some_and(|w| w != 0);
     let hang = |grams: f64| {
         TipLoad::force(Vector3::new(
             0.0,
@@ -55,22 +59,27 @@ fn main() -> Result<(), ModelError> {
         let load = hang(g);
         let converged = model.solve(&load, Start::Cold, &tight)?;
         let lighter = model.solve(&hang(g * 0.99), Start::Cold, &settings)?;
-        let mut starts = vec![("cold", Start::Cold)];
+        let mut starts = vec![("cold", Some(Start::Cold))];
         if warm {
-            starts.push(("warm", Start::Warm(lighter.base_strain_per_m)));
-            starts.push(("neighbour", lighter.next_start()));
+            starts.push(("warm", Some(Start::Warm(lighter.base_strain_per_m))));
+            starts.push(("neighbour", Some(lighter.next_start())));
+        }
+        let reduced = PlanarModel::new(&model, &load).filter(|_| planar);
+        if reduced.is_some() {
+            starts.push(("planar", None));
         }
         for (name, start) in starts {
-            let eq = model.solve(&load, start, &settings)?;
+            let solve = |load: &TipLoad<f64>| match (start, &reduced) {
+                (Some(start), _) => model.solve(load, start, &settings),
+                (None, Some(reduced)) => reduced.solve(load, &settings),
+                (None, None) => Err(ModelError::OutOfRange("no planar reduction")),
+            };
+            let eq = solve(&load)?;
             let mut batches = Vec::new();
             for _ in 0..31 {
                 let t0 = Instant::now();
                 for _ in 0..50 {
-                    std::hint::black_box(model.solve(
-                        std::hint::black_box(&load),
-                        start,
-                        &settings,
-                    )?);
+                    std::hint::black_box(solve(std::hint::black_box(&load))?);
                 }
                 batches.push(t0.elapsed().as_secs_f64() * 1e6 / 50.0);
             }

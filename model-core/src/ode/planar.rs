@@ -1,18 +1,22 @@
 //! The planar reduction's equations: when every load lies in one plane through the base tangent and
 //! the section bends freely about the plane's normal, the rod stays in that plane, and the 3D statics
-//! reduce to position `(x, y)`, tangent direction `(c, s)` and one curvature `k`:
+//! reduce to position `(x, y)`, the direction's half-turn pair `q` and one curvature `k`:
 //!
-//! `r' = v_t t + v_n t_perp`, `t' = k t_perp`, `E I k' = -(r' x n)_z`,
+//! `r' = v_t t + v_n t_perp`, `q' = (k / 2) q_perp`, `E I k' = -(r' x n)_z`,
 //! `v_t = 1 + n.t / E A`, `v_n = n.t_perp / G A` (or `1, 0` for a Kirchhoff rod),
 //!
-//! with `t = (c, s)`, `t_perp = (-s, c)`: five states instead of the 3D rod's ten (quaternion) to
-//! fifteen (rotation matrix), no frame to orthonormalise (the direction is renormalised after each
-//! step), one shooting unknown `k(0)`. Cable holes rotate with the frame about the plane's normal, so
-//! cable lengths and the 3D shape follow exactly.
+//! with `t = (q_x^2 - q_y^2, 2 q_x q_y) / |q|^2 = (cos phi, sin phi)`, `t_perp = (-t_y, t_x)`: five
+//! states instead of the 3D rod's ten (quaternion) to fifteen (rotation matrix), one shooting unknown
+//! `k(0)`. `q` is the 3D quaternion's part in the plane, stepped and renormalised as the quaternion
+//! is (`kinematics.rs`), so every RK4 stage here is the 3D quaternion sweep's stage restricted to the
+//! plane: the same discretisation, and the same answer to rounding on any grid (MODEL.md §3.8).
+//! Cable holes rotate with the frame about the plane's normal, so cable lengths and the 3D shape
+//! follow exactly.
 //!
-//! Linearised (a tangent `(dr, dt, dk)`): `dr' = dt v_t + t dv_t + dt_perp v_n + t_perp dv_n`,
-//! `dt' = t_perp dk + dt_perp k`, `E I dk' = -(dr' x n)_z`, with `dv_t = n.dt / E A`,
-//! `dv_n = n.dt_perp / G A`. The in-plane Jacobi field is the turn `t x dt` per unit `dk(0)`.
+//! Linearised (a tangent `(dr, dtheta, dk)`, `dtheta` the turn, `dt = t_perp dtheta`):
+//! `dr' = t_perp (v_t dtheta + dv_n) + t (dv_t - v_n dtheta)`, `dtheta' = dk`,
+//! `E I dk' = -(dr' x n)_z`, with `dv_t = (n.t_perp) dtheta / E A`, `dv_n = -(n.t) dtheta / G A`.
+//! The in-plane Jacobi field is the turn `dtheta` per unit `dk(0)`.
 
 use nalgebra::{Matrix3, SVector, Vector2, Vector3};
 
@@ -118,27 +122,37 @@ fn cross2<T: Scalar>(a: &Vector2<T>, b: &Vector2<T>) -> T {
     a.x * b.y - a.y * b.x
 }
 
-/// The planar state: position relative to the base (high and low parts), direction, curvature.
+/// The direction `t = (cos phi, sin phi)` of the half-turn pair `q = |q| (cos phi/2, sin phi/2)`,
+/// exactly the 3D frame of the quaternion `q0 (q.x, q.y n)` (its `matrix` normalises as this does).
+#[inline]
+fn direction<T: Scalar>(q: &Vector2<T>) -> Vector2<T> {
+    let s = T::lit(2.0) / q.norm_squared();
+    Vector2::new(T::one() - q.y * q.y * s, q.x * q.y * s)
+}
+
+/// The planar state: position relative to the base (high and low parts), the direction's half-turn
+/// pair `q` (the quaternion's part in the plane, so that a step turns the frame exactly as the 3D
+/// quaternion sweep's step does), curvature.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct State<T: Scalar> {
     r: Vector2<T>,
     r_lo: Vector2<T>,
-    t: Vector2<T>,
+    q: Vector2<T>,
     k: T,
 }
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Rates<T: Scalar> {
     r: Vector2<T>,
-    t: Vector2<T>,
+    q: Vector2<T>,
     k: T,
 }
 
-/// A tangent `(dr, dt, dk)`.
+/// A tangent `(dr, dtheta, dk)`: `dtheta` the turn of the direction, `dt = t_perp dtheta`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Tangent<T: Scalar> {
     r: Vector2<T>,
-    t: Vector2<T>,
+    th: T,
     k: T,
 }
 
@@ -147,7 +161,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
     fn zero() -> Self {
         Self {
             r: Vector2::zeros(),
-            t: Vector2::zeros(),
+            th: T::zero(),
             k: T::zero(),
         }
     }
@@ -156,7 +170,7 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
     fn axpy(&self, k: &Self, h: T) -> Self {
         Self {
             r: self.r + k.r * h,
-            t: self.t + k.t * h,
+            th: self.th + k.th * h,
             k: self.k + k.k * h,
         }
     }
@@ -167,13 +181,13 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
         let [k1, k2, k3, k4] = k;
         Self {
             r: self.r + (k1.r + k4.r) * w1 + (k2.r + k3.r) * w2,
-            t: self.t + (k1.t + k4.t) * w1 + (k2.t + k3.t) * w2,
+            th: self.th + (k1.th + k4.th) * w1 + (k2.th + k3.th) * w2,
             k: self.k + (k1.k + k4.k) * w1 + (k2.k + k3.k) * w2,
         }
     }
 
     fn is_finite(&self) -> bool {
-        self.r.iter().chain(self.t.iter()).all(|x| x.is_finite()) && self.k.is_finite()
+        self.r.iter().all(|x| x.is_finite()) && self.th.is_finite() && self.k.is_finite()
     }
 }
 
@@ -184,7 +198,6 @@ pub(crate) struct Stage<T: Scalar> {
     n: Vector2<T>,
     vt: T,
     vn: T,
-    k: T,
 }
 
 /// One interval's coefficients: bending, shear and axial compliance, and the force field
@@ -242,7 +255,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
         State {
             r: Vector2::zeros(),
             r_lo: Vector2::zeros(),
-            t: Vector2::new(T::one(), T::zero()),
+            q: Vector2::new(T::one(), T::zero()),
             k: x[0],
         }
     }
@@ -269,7 +282,6 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
             n: Vector2::zeros(),
             vt: T::zero(),
             vn: T::zero(),
-            k: T::zero(),
         }
     }
 
@@ -281,7 +293,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
     #[inline]
     fn bending_load(&self, f: &Field<T>, s: T, y: &State<T>) -> T {
         let n = f.n_end + f.g_lambda * (f.s1 - s);
-        super::bending_load(&n, &y.t, T::one() / (f.ei * f.ei))
+        super::bending_load(&n, &direction(&y.q), T::one() / (f.ei * f.ei))
     }
 
     fn field(&self, interval: &Interval<T>) -> Option<Field<T>> {
@@ -302,25 +314,20 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
     #[inline]
     fn rate(&self, f: &Field<T>, s: T, y: &State<T>, record: Option<&mut Stage<T>>) -> Rates<T> {
         let n = f.n_end + f.g_lambda * (f.s1 - s);
-        let np = perp(&y.t);
+        let t = direction(&y.q);
+        let np = perp(&t);
         let (vt, vn) = if f.kirchhoff {
             (T::one(), T::zero())
         } else {
-            (T::one() + n.dot(&y.t) * f.ea_inv, n.dot(&np) * f.ga_inv)
+            (T::one() + n.dot(&t) * f.ea_inv, n.dot(&np) * f.ga_inv)
         };
-        let r = y.t * vt + np * vn;
+        let r = t * vt + np * vn;
         if let Some(stage) = record {
-            *stage = Stage {
-                t: y.t,
-                n,
-                vt,
-                vn,
-                k: y.k,
-            };
+            *stage = Stage { t, n, vt, vn };
         }
         Rates {
             r,
-            t: np * y.k,
+            q: perp(&y.q) * (y.k * T::lit(0.5)),
             k: -cross2(&r, &n) / f.ei,
         }
     }
@@ -330,7 +337,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
         State {
             r: y.r + k.r * h,
             r_lo: y.r_lo,
-            t: y.t + k.t * h,
+            q: y.q + k.q * h,
             k: y.k + k.k * h,
         }
     }
@@ -343,36 +350,36 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
         State {
             r,
             r_lo: y.r_lo + lo,
-            t: y.t + (k1.t + k4.t) * w1 + (k2.t + k3.t) * w2,
+            q: y.q + (k1.q + k4.q) * w1 + (k2.q + k3.q) * w2,
             k: y.k + (k1.k + k4.k) * w1 + (k2.k + k3.k) * w2,
         }
     }
 
     #[inline]
     fn tangent_rate(&self, f: &Field<T>, st: &Stage<T>, _: &(), t: &Tangent<T>) -> Tangent<T> {
+        // dt = t_perp dtheta, dt_perp = -t dtheta.
         let np = perp(&st.t);
-        let dnp = perp(&t.t);
         let (dvt, dvn) = if f.kirchhoff {
             (T::zero(), T::zero())
         } else {
-            (st.n.dot(&t.t) * f.ea_inv, st.n.dot(&dnp) * f.ga_inv)
+            (
+                st.n.dot(&np) * t.th * f.ea_inv,
+                -st.n.dot(&st.t) * t.th * f.ga_inv,
+            )
         };
-        let dr = t.t * st.vt + st.t * dvt + dnp * st.vn + np * dvn;
+        let dr = np * (st.vt * t.th + dvn) + st.t * (dvt - st.vn * t.th);
         Tangent {
             r: dr,
-            t: np * t.k + dnp * st.k,
+            th: t.k,
             k: -cross2(&dr, &st.n) / f.ei,
         }
     }
 
-    /// Keeps the direction a unit vector; its tangents stay perpendicular to it.
+    /// Keeps the half-turn pair a unit vector, as the 3D sweep its quaternion.
     #[inline]
-    fn after_step(&self, y: &mut State<T>, tangents: &mut [Tangent<T>]) {
-        let norm = y.t.norm_squared().sqrt_hot();
-        y.t /= norm;
-        for t in tangents.iter_mut() {
-            t.t -= y.t * y.t.dot(&t.t);
-        }
+    fn after_step(&self, y: &mut State<T>, _tangents: &mut [Tangent<T>]) {
+        let norm = y.q.norm_squared().sqrt_hot();
+        y.q /= norm;
     }
 
     /// A change of stiffness or a point moment about the normal: `k+ = (E I- k- - tau) / E I+`.
@@ -416,16 +423,16 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
         Pose {
             position_m: self.model.rod().base_position_m + self.in_space(&y.r),
             position_lo_m: self.in_space(&y.r_lo),
-            rotation: self.frame(&y.t),
+            rotation: self.frame(&direction(&y.q)),
         }
     }
 
-    fn tangent_pose(&self, y: &State<T>, t: &Tangent<T>) -> (Vector3<T>, Vector3<T>) {
-        (self.in_space(&t.r), self.local_normal * cross2(&y.t, &t.t))
+    fn tangent_pose(&self, _: &State<T>, t: &Tangent<T>) -> (Vector3<T>, Vector3<T>) {
+        (self.in_space(&t.r), self.local_normal * t.th)
     }
 
     fn shape_point(&self, s: T, y: &State<T>, _: &Field<T>) -> ShapePoint<T> {
-        let frame = self.frame(&y.t);
+        let frame = self.frame(&direction(&y.q));
         let pose = self.pose(y);
         ShapePoint {
             s_m: s,
@@ -436,7 +443,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
     }
 
     fn finite(&self, y: &State<T>, tangents: &[Tangent<T>]) -> bool {
-        y.r.iter().chain(y.t.iter()).all(|x| x.is_finite())
+        y.r.iter().chain(y.q.iter()).all(|x| x.is_finite())
             && y.k.is_finite()
             && tangents.iter().all(Linear::is_finite)
     }
@@ -455,14 +462,12 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
     fn crosses(
         &self,
         _: &mut (),
-        y: &State<T>,
+        _: &State<T>,
         tangents: &[Tangent<T>],
         _: &Field<T>,
         _: T,
     ) -> bool {
-        tangents
-            .first()
-            .is_some_and(|t| cross2(&y.t, &t.t) <= T::zero())
+        tangents.first().is_some_and(|t| t.th <= T::zero())
     }
 
     fn jacobi_rotation(&self, d_rotation: &Vector3<T>) -> SVector<T, 1> {
