@@ -176,3 +176,92 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
         shape_of(&ode, &SVector::<T, 1>::new(k0), s_m, out)
     }
 }
+
+/// Instruction counts behind [`crate::reduction::step_cost`]: run the test binary of
+/// `cargo test --release -p model-core --lib step_cost_probe -- --ignored` under
+/// `valgrind --tool=callgrind --toggle-collect='*step_cost_probe::sweep_*'`, with `KIRCHHOFF=1` for
+/// the Kirchhoff rod, and divide each sweep probe's inclusive count (`callgrind_annotate
+/// --inclusive=yes`) by the sweeps and steps it prints.
+#[cfg(test)]
+mod step_cost_probe {
+    use nalgebra::{SVector, Vector3};
+
+    use super::*;
+    use crate::ode::RodOde;
+    use crate::rod::{Cable, Guide, Rod, Section, StrainModel};
+    use crate::sweep::TangentSet;
+    use crate::{CrossSection, GuideMass, Material, Start, Stiffness};
+
+    /// The thesis's exp-2 bench: one 0.39 m section of 1.56 mm Nitinol, five 2.2 g guides (their
+    /// mass spread over their thickness), three cables at 10 mm, gravity.
+    fn bench(strain_model: StrainModel) -> Rod<f64> {
+        let mut rod = Rod::new();
+        rod.gravity_m_s2 = Vector3::new(0.0, -9.81, 0.0);
+        rod.guide_mass = GuideMass::Accurate;
+        rod.strain_model = strain_model;
+        let d = 1.56e-3;
+        let material = Material::isotropic(62.7e9, 0.3).unwrap();
+        rod.push_section(Section {
+            length_m: 0.39,
+            stiffness: Stiffness::from_material(&material, &CrossSection::solid_circle(d).unwrap())
+                .unwrap(),
+            line_density_kg_per_m: 6800.0 * core::f64::consts::PI * d * d / 4.0,
+            steps: 20,
+        })
+        .unwrap();
+        for k in 0..5 {
+            rod.push_guide(Guide {
+                s_m: 0.0039 + 3.01e-3 / 2.0 + f64::from(k) * 0.095,
+                thickness_m: 3.01e-3,
+                mass_kg: 2.2e-3,
+            })
+            .unwrap();
+        }
+        for deg in [90.0_f64, 210.0, 330.0] {
+            rod.push_cable(Cable::at_angle(deg.to_radians(), 0.01, 0.39))
+                .unwrap();
+        }
+        rod
+    }
+
+    #[inline(never)]
+    fn sweep_3d<O: RodOde<f64, 3>>(ode: &O, x: &SVector<f64, 3>) -> bool {
+        crate::sweep::sweep(ode, x, TangentSet::NONE, None).finite
+    }
+
+    #[inline(never)]
+    fn sweep_planar<O: RodOde<f64, 1>>(ode: &O, x: &SVector<f64, 1>) -> bool {
+        crate::sweep::sweep(ode, x, TangentSet::NONE, None).finite
+    }
+
+    #[test]
+    #[ignore = "a measurement: run under callgrind (see the module's doc)"]
+    fn step_cost_probe() {
+        let load = TipLoad::force(Vector3::new(0.0, -0.0402 * 9.81, 0.0));
+        let settings = ShootingSettings::default();
+        let repeat = 10;
+        // One strain model a run, so that callgrind counts each apart.
+        let strain_model = if std::env::var("KIRCHHOFF").is_ok_and(|v| v == "1") {
+            StrainModel::Kirchhoff
+        } else {
+            StrainModel::Cosserat
+        };
+        {
+            let model = Model::<f64>::new(bench(strain_model)).unwrap();
+            let full = model.solve(&load, Start::Cold, &settings).unwrap();
+            let planar = PlanarModel::new(&model, &load).unwrap();
+            let reduced = planar.solve(&load, &settings).unwrap();
+            let dead = DeadLoadRod::new(&model, &load, 1.0);
+            let ode = planar.ode(&load);
+            let k0 = SVector::<f64, 1>::new(reduced.base_strain_per_m.dot(&ode.local_normal()));
+            for _ in 0..repeat {
+                assert!(sweep_3d(&dead, &full.base_strain_per_m));
+                assert!(sweep_planar(&ode, &k0));
+            }
+            eprintln!(
+                "{strain_model:?}: {repeat} sweeps of {} steps each, 3D and planar",
+                model.plan().total_steps()
+            );
+        }
+    }
+}

@@ -51,16 +51,17 @@ pub struct Variant {
 }
 
 /// Relative cost of one RK4 step of a plain sweep (3D Cosserat = 100), from instruction counts on
-/// x86-64 (callgrind, f64, the thesis bench): 3D Cosserat 1188, 3D Kirchhoff 1168, planar Cosserat 700,
-/// planar Kirchhoff 586 instructions per step (the planar ones measured before its direction was
-/// stepped as the half-turn pair, which adds a division per stage; the study's planar / 3D time per
-/// solve stayed 0.47x).
+/// x86-64 (callgrind, f64, the thesis's exp-2 bench with guide masses and three cables, 20 steps;
+/// `planar.rs`'s `step_cost_probe`): 3D Cosserat 1802, 3D Kirchhoff 1794 (99.6, rounded down: it
+/// does strictly less), planar Cosserat 945, planar Kirchhoff 893 instructions per step. (With the
+/// planar direction stepped as a unit vector, before it was the half-turn pair, the same probe gave
+/// 834 and 794; an earlier measurement on another bench, 59 and 49.)
 pub fn step_cost(planar: bool, kirchhoff: bool) -> u32 {
     match (planar, kirchhoff) {
         (false, false) => 100,
-        (false, true) => 98,
-        (true, false) => 59,
-        (true, true) => 49,
+        (false, true) => 99,
+        (true, false) => 52,
+        (true, true) => 50,
     }
 }
 
