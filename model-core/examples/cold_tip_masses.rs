@@ -17,8 +17,14 @@ use std::time::Instant;
 use model_checks::reference;
 use model_core::planar::PlanarModel;
 use model_core::rod::{GuideMass, Rod, Section};
-use model_core::{Model, ModelError, ShootingSettings, Start, TipLoad};
+use model_core::{Model, ModelError, Quaternion, ShootingSettings, Start, TipLoad};
 use nalgebra::Vector3;
+
+/// What a line times: the 3D solve from a start, or the planar reduction's cold solve.
+enum Solver<'a> {
+    Full(Start<f64>),
+    Planar(PlanarModel<'a, f64, Quaternion<f64>>),
+}
 
 fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
     std::env::var(name).ok().and_then(|v| v.parse().ok())
@@ -59,20 +65,19 @@ fn main() -> Result<(), ModelError> {
         let load = hang(g);
         let converged = model.solve(&load, Start::Cold, &tight)?;
         let lighter = model.solve(&hang(g * 0.99), Start::Cold, &settings)?;
-        let mut starts = vec![("cold", Some(Start::Cold))];
+        let mut solvers = vec![("cold", Solver::Full(Start::Cold))];
         if warm {
-            starts.push(("warm", Some(Start::Warm(lighter.base_strain_per_m))));
-            starts.push(("neighbour", Some(lighter.next_start())));
+            let start = Start::Warm(lighter.base_strain_per_m);
+            solvers.push(("warm", Solver::Full(start)));
+            solvers.push(("neighbour", Solver::Full(lighter.next_start())));
         }
-        let reduced = PlanarModel::new(&model, &load).filter(|_| planar);
-        if reduced.is_some() {
-            starts.push(("planar", None));
+        if let Some(reduced) = PlanarModel::new(&model, &load).filter(|_| planar) {
+            solvers.push(("planar", Solver::Planar(reduced)));
         }
-        for (name, start) in starts {
-            let solve = |load: &TipLoad<f64>| match (start, &reduced) {
-                (Some(start), _) => model.solve(load, start, &settings),
-                (None, Some(reduced)) => reduced.solve(load, &settings),
-                (None, None) => Err(ModelError::OutOfRange("no planar reduction")),
+        for (name, solver) in &solvers {
+            let solve = |load: &TipLoad<f64>| match solver {
+                Solver::Full(start) => model.solve(load, *start, &settings),
+                Solver::Planar(reduced) => reduced.solve(load, &settings),
             };
             let eq = solve(&load)?;
             let mut batches = Vec::new();

@@ -246,22 +246,20 @@ mod step_cost_probe {
         } else {
             StrainModel::Cosserat
         };
-        {
-            let model = Model::<f64>::new(bench(strain_model)).unwrap();
-            let full = model.solve(&load, Start::Cold, &settings).unwrap();
-            let planar = PlanarModel::new(&model, &load).unwrap();
-            let reduced = planar.solve(&load, &settings).unwrap();
-            let dead = DeadLoadRod::new(&model, &load, 1.0);
-            let ode = planar.ode(&load);
-            let k0 = SVector::<f64, 1>::new(reduced.base_strain_per_m.dot(&ode.local_normal()));
-            for _ in 0..repeat {
-                assert!(sweep_3d(&dead, &full.base_strain_per_m));
-                assert!(sweep_planar(&ode, &k0));
-            }
-            eprintln!(
-                "{strain_model:?}: {repeat} sweeps of {} steps each, 3D and planar",
-                model.plan().total_steps()
-            );
+        let model = Model::<f64>::new(bench(strain_model)).unwrap();
+        let full = model.solve(&load, Start::Cold, &settings).unwrap();
+        let planar = PlanarModel::new(&model, &load).unwrap();
+        let reduced = planar.solve(&load, &settings).unwrap();
+        let dead = DeadLoadRod::new(&model, &load, 1.0);
+        let ode = planar.ode(&load);
+        let k0 = SVector::<f64, 1>::new(reduced.base_strain_per_m.dot(&ode.local_normal()));
+        for _ in 0..repeat {
+            assert!(sweep_3d(&dead, &full.base_strain_per_m));
+            assert!(sweep_planar(&ode, &k0));
         }
+        eprintln!(
+            "{strain_model:?}: {repeat} sweeps of {} steps each, 3D and planar",
+            model.plan().total_steps()
+        );
     }
 }
