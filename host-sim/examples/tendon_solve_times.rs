@@ -10,7 +10,8 @@
 //! gives the termination, sweeps, load steps, the median wall time per solve (`BATCHES` batches of
 //! `REPEATS` solves, the median of the batch means; defaults 11 and 5), the tip and its distance
 //! from the reference (the same model at 800 RK4 steps per section) and the tensions. `STEPS` sets
-//! the steps per section of the timed solves (default the scene's).
+//! the steps per section of the timed solves (default the scene's), `CONTINUOUS_STEPS` those of the
+//! continuous routing's (default `STEPS`): at equal accuracy the two models need different grids.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -168,6 +169,10 @@ fn main() -> Result<(), SceneError> {
     let us = time_us(|| displaced(Some(&previous_displacement)));
     print("displacements_warm", &d.solved, d.sweeps, us);
 
+    let (model, tendons) = match env("CONTINUOUS_STEPS") {
+        Some(steps) => robot(&scene, Some(steps))?,
+        None => (model, tendons),
+    };
     let continuous = || model.solve_tendons_continuous(&tendons, &tensions, &load, None, &settings);
     let c = continuous().map_err(refused("continuous"))?;
     print(

@@ -116,6 +116,11 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn blank_stage(&self) -> Self::Stage;
     /// The coefficients on `interval`; `None` when the scene does not have them (a corrupt plan).
     fn field(&self, interval: &Interval<T>) -> Option<Self::Field>;
+    /// The same on the interval after `previous`'s, whose coefficients it may share (a sweep
+    /// walks the plan in order); by default [`RodOde::field`].
+    fn next_field(&self, _previous: &Self::Field, interval: &Interval<T>) -> Option<Self::Field> {
+        self.field(interval)
+    }
     /// The bending load at `(s, y)`, 1/m^4: [`bending_load`] of the internal force there.
     fn bending_load(&self, f: &Self::Field, s: T, y: &Self::State) -> T;
     /// The same from the record of a step's first stage (at the step's start), which has the force

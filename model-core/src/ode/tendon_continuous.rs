@@ -47,8 +47,8 @@ pub(crate) struct ContinuousTendonRod<'a, T: Scalar, A: Attitude<T>, const NODES
     /// Tensions at the load scale, N.
     scaled_n: [T; MAX_TENDONS],
     kirchhoff: bool,
-    /// Where the tip condition hands out the path lengths integrated along (a sweep for them only).
-    paths: Option<&'a Cell<[T; MAX_TENDONS]>>,
+    /// Where each sweep leaves its unknowns, load scale and the path lengths it integrated.
+    record: Option<&'a PathRecord<T>>,
 }
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Clone for ContinuousTendonRod<'_, T, A, NODES> {
@@ -76,21 +76,22 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> ContinuousTendonRod<'a, 
             tensions_n: *tensions_n,
             scaled_n: tensions_n.map(|t| t * alpha),
             kirchhoff: model.rod().strain_model == StrainModel::Kirchhoff,
-            paths: None,
+            record: None,
         }
     }
 
-    /// The same equations, handing out the path lengths into `paths` at the tip.
-    pub(crate) fn with_paths<'b>(
+    /// The same equations, leaving in `record` where each sweep ran and the path lengths it
+    /// integrated to the tip.
+    pub(crate) fn recording<'b>(
         &self,
-        paths: &'b Cell<[T; MAX_TENDONS]>,
+        record: &'b PathRecord<T>,
     ) -> ContinuousTendonRod<'b, T, A, NODES>
     where
         'a: 'b,
     {
         let shorter: ContinuousTendonRod<'b, T, A, NODES> = *self;
         ContinuousTendonRod {
-            paths: Some(paths),
+            record: Some(record),
             ..shorter
         }
     }
@@ -169,6 +170,42 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> ContinuousTendonRod<'a, 
     }
 }
 
+/// What the last sweep saw: its unknowns, its load scale and each tendon's path length at the tip.
+/// A solve's converged sweep ran at its answer, so the solve's paths are read from it rather than
+/// from one more sweep (when the record is that sweep's: same unknowns, full scale, reached the tip).
+#[derive(Debug)]
+pub(crate) struct PathRecord<T: Scalar> {
+    x: Cell<SVector<T, 6>>,
+    alpha: Cell<T>,
+    /// Not a number until the sweep reaches the tip.
+    paths: Cell<[T; MAX_TENDONS]>,
+}
+
+impl<T: Scalar> PathRecord<T> {
+    /// An empty record.
+    pub(crate) fn new() -> Self {
+        Self {
+            x: Cell::new(SVector::repeat(T::lit(f64::NAN))),
+            alpha: Cell::new(T::zero()),
+            paths: Cell::new([T::lit(f64::NAN); MAX_TENDONS]),
+        }
+    }
+
+    /// The path lengths of the last sweep, if it ran at unknowns `x` at full load to the tip and
+    /// they are finite.
+    pub(crate) fn paths_at(&self, x: &SVector<T, 6>) -> Option<[T; MAX_TENDONS]> {
+        let paths = self.paths.get();
+        let held = self.x.get() == *x && self.alpha.get() == T::one();
+        (held && paths.iter().all(|l| l.is_finite())).then_some(paths)
+    }
+
+    fn start(&self, x: &SVector<T, 6>, alpha: T) {
+        self.x.set(*x);
+        self.alpha.set(alpha);
+        self.paths.set([T::lit(f64::NAN); MAX_TENDONS]);
+    }
+}
+
 /// The rod's state and each tendon's path length so far.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct State<T: Scalar, A> {
@@ -207,6 +244,8 @@ pub(crate) struct Field<'a, T> {
     routing: Routing<T>,
     /// The strain solve's chord matrix.
     chord: SMatrix<T, 6, 6>,
+    /// The section's index in the rod.
+    section_index: u8,
 }
 
 type Inner<'a, T, A, const NODES: usize> = ForceStateRod<'a, T, A, NoShapeLoad, NODES>;
@@ -245,6 +284,9 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     }
 
     fn start(&self, x: &SVector<T, 6>) -> State<T, A> {
+        if let Some(record) = self.record {
+            record.start(x, self.rod.alpha());
+        }
         State {
             rod: self.rod.start(x),
             path_m: [T::zero(); MAX_TENDONS],
@@ -283,6 +325,23 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
             chord: chord_matrix(&section, &routing)?,
             section,
             routing,
+            section_index: interval.section,
+        })
+    }
+
+    /// Within a section and a set of tendons, the chord matrix is the previous interval's.
+    fn next_field(&self, previous: &Field<'a, T>, interval: &Interval<T>) -> Option<Field<'a, T>> {
+        let mid = (interval.s0_m + interval.s1_m) * T::lit(0.5);
+        let routing = Routing::along(self.tendons, self.tensions(), mid);
+        if interval.section != previous.section_index || !routing.same_tendons(&previous.routing) {
+            return self.field(interval);
+        }
+        Some(Field {
+            rod: self.rod.field(interval)?,
+            chord: previous.chord,
+            section: previous.section,
+            routing,
+            section_index: interval.section,
         })
     }
 
@@ -407,8 +466,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         seeds: &[Vector3<T>],
         d: &mut [SVector<T, 6>],
     ) -> SVector<T, 6> {
-        if let Some(paths) = self.paths {
-            paths.set(y.path_m);
+        if let Some(record) = self.record {
+            record.paths.set(y.path_m);
         }
         self.rod.tip(node, &last.rod, &y.rod, tangents, seeds, d)
     }
@@ -569,6 +628,50 @@ mod tests {
                 worst < 1e-7,
                 "{strain_model:?}: Jacobian off by {worst:e} (relative)"
             );
+        }
+    }
+
+    /// A record hands out the path lengths of the sweep it recorded, only at that sweep's unknowns
+    /// and at full load: a sweep with tangents integrates the same paths as one without, and a
+    /// solve's paths (read from its converged sweep) are a plain sweep's at its answer.
+    #[test]
+    fn tendon_continuous_record_keeps_its_sweeps_paths() {
+        let (model, tendons) = scene(StrainModel::Cosserat);
+        let set = Tendons::new(&model, &tendons).unwrap();
+        let mut tau = [0.0; MAX_TENDONS];
+        tau[..3].copy_from_slice(&[2.0, 1.5, 0.8]);
+        let load = TipLoad::force(Vector3::new(0.1, -0.2, 0.05));
+        let record = PathRecord::new();
+        let ode = ContinuousTendonRod::new(&model, &set, &tau, &load, 1.0);
+        let recording = ode.recording(&record);
+        let x = ode.guess() * 0.7 + SVector::<f64, 6>::from_fn(|i, _| 0.1 * i as f64);
+        assert!(sweep(&recording, &x, TangentSet::unknowns(false), None).finite);
+        let with_tangents = record.paths_at(&x).unwrap();
+        let mut nearby = x;
+        nearby[2] += 1e-12;
+        assert!(record.paths_at(&nearby).is_none());
+        assert!(sweep(&recording, &x, TangentSet::NONE, None).finite);
+        let plain = record.paths_at(&x).unwrap();
+        for j in 0..3 {
+            // Lengths of curves about as long as the tendons' terminations' arc lengths.
+            assert!(plain[j] > 0.1 && plain[j] < 0.3, "{plain:?}");
+            assert!((with_tangents[j] - plain[j]).abs() < 1e-15, "tendon {j}");
+        }
+        assert!(sweep(&recording.at_scale(0.5), &x, TangentSet::NONE, None).finite);
+        assert!(record.paths_at(&x).is_none());
+
+        let solved = model
+            .solve_tendons_continuous(&set, &tau[..3], &load, None, &Default::default())
+            .unwrap();
+        assert!(solved.is_success(), "{:?}", solved.equilibrium.report);
+        let eq = &solved.equilibrium;
+        let answer = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+        // The unknowns rebuilt from the base force and moment, not bit for bit the solve's.
+        assert!(sweep(&recording, &answer, TangentSet::NONE, None).finite);
+        let swept = record.paths_at(&answer).unwrap();
+        for (j, (path, swept)) in solved.path_m.iter().zip(&swept).enumerate() {
+            let gap = (path - swept).abs();
+            assert!(gap < 1e-13, "tendon {j}: {gap:e} m");
         }
     }
 

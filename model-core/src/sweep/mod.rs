@@ -303,7 +303,11 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
         .unwrap_or(beyond);
 
     for (k, interval) in grid.intervals.iter().enumerate() {
-        let Some(field) = ode.field(interval) else {
+        let next = match &proximal {
+            Some(prox) => ode.next_field(prox, interval),
+            None => ode.field(interval),
+        };
+        let Some(field) = next else {
             return out;
         };
         let node = grid.nodes.get(k);

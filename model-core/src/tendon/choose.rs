@@ -47,12 +47,15 @@ pub struct TendonVariant {
 /// instruction counts (callgrind, x86-64, f64, the test profile) on the two-section, six-tendon
 /// robot (14 guides, gravity, a tip force, 20 steps per section: 48 steps; at its solution;
 /// `cost_probe` below): dead load 1828, discrete guides 22091 (38845 before a plain sweep's jumps
-/// took chord steps and `W_next` its direct form, MODEL.md §6.5), continuous routing 20499
-/// instructions per step. A discrete-guide step includes its share of the look-ahead each implicit
-/// jump integrates (a Newton pass over the segment with six directions, then chord passes of the
-/// state alone); a continuous step its four strain solves (about 3.7k instructions each: chord
-/// steps, an interval's chord matrix). Whole cold solves there: discrete guides 58.4 M
-/// instructions (21 sweeps; 75.3 M before), continuous routing 23.8 M (7 sweeps).
+/// took chord steps and `W_next` its direct form, MODEL.md §6.5), continuous routing 18338
+/// instructions per step (20499 before a sweep carried the chord matrix across the intervals of
+/// one section and set of tendons). A discrete-guide step includes its share of the look-ahead
+/// each implicit jump integrates (a Newton pass over the segment with six directions, then chord
+/// passes of the state alone); a continuous step its four strain solves (chord steps from the
+/// straight tendons). Whole cold solves there: discrete guides 25.1 M instructions (9 sweeps; 58.4 M
+/// and 21 sweeps before the joint step and the trust region by the shape, §6.3, §6.5), continuous
+/// routing 14.1 M (7 sweeps; 23.8 M before the chord matrix carried across intervals, the block
+/// inverse of the strain solve's Jacobian and the paths read from the converged sweep, §6.8).
 pub fn tendon_step_cost(model: TendonModel) -> u32 {
     match model {
         TendonModel::DiscreteGuides => DISCRETE_STEP_COST,
@@ -62,7 +65,7 @@ pub fn tendon_step_cost(model: TendonModel) -> u32 {
 }
 
 const DISCRETE_STEP_COST: u32 = 1208;
-const CONTINUOUS_STEP_COST: u32 = 1121;
+const CONTINUOUS_STEP_COST: u32 = 1003;
 
 /// The cost of a piecewise-constant-curvature shape, in the same units: the whole closed form
 /// (7442 instructions on the same robot, checks included). The grid variants' costs are one plain

@@ -4,8 +4,6 @@
 //! no look-ahead at the guides, so a sweep costs a strain solve per stage instead of an implicit jump
 //! per guide. Guides still carry mass and place terminations; their holes play no part.
 
-use core::cell::Cell;
-
 use heapless::Vec;
 use nalgebra::SVector;
 
@@ -15,7 +13,7 @@ use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::tendon_continuous::ContinuousTendonRod;
+use crate::ode::tendon_continuous::{ContinuousTendonRod, PathRecord};
 use crate::report::Termination;
 use crate::shape::ShapePoint;
 use crate::shooting::{ShootingSettings, equilibrium, shape_of};
@@ -44,7 +42,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let tau = tendons.check_tensions(tensions_n)?;
         load.validate()?;
         settings.validate()?;
+        let record = PathRecord::new();
         let ode = ContinuousTendonRod::new(self, tendons, &tau, load, T::one());
+        let ode = ode.recording(&record);
         let start = match start {
             Some(previous) => {
                 let eq = &previous.equilibrium;
@@ -70,7 +70,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         }
         let mut path_m = Vec::new();
         if let (true, Some(x)) = (eq.report.termination.is_success(), x) {
-            match continuous_paths(&ode, &x) {
+            match continuous_paths(&ode, &record, &x) {
                 Some(lengths) => {
                     for l in lengths.iter().take(tendons.len()) {
                         let _ = path_m.push(*l);
@@ -108,13 +108,17 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     }
 }
 
-/// The path lengths at unknowns `x`: one plain sweep that hands them out at the tip.
+/// The path lengths at unknowns `x`: those the solve's last sweep integrated when it ran at `x`
+/// (the converged sweep), else one plain sweep's.
 fn continuous_paths<T: Scalar, A: Attitude<T>, const NODES: usize>(
     ode: &ContinuousTendonRod<'_, T, A, NODES>,
+    record: &PathRecord<T>,
     x: &SVector<T, 6>,
 ) -> Option<[T; MAX_TENDONS]> {
-    let paths = Cell::new([T::lit(f64::NAN); MAX_TENDONS]);
-    let sw = sweep(&ode.with_paths(&paths), x, TangentSet::NONE, None);
-    let lengths = paths.get();
-    (sw.finite && lengths.iter().all(|l| l.is_finite())).then_some(lengths)
+    if let Some(paths) = record.paths_at(x) {
+        return Some(paths);
+    }
+    let sw = sweep(ode, x, TangentSet::NONE, None);
+    let paths = record.paths_at(x);
+    sw.finite.then_some(paths).flatten()
 }

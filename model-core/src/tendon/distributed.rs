@@ -93,6 +93,13 @@ impl<T: Scalar> Routing<T> {
             .map(|((i, r), t)| (*i, r, *t))
     }
 
+    /// Whether both route the same tendons at the same tensions.
+    pub(crate) fn same_tendons(&self, other: &Self) -> bool {
+        self.count == other.count
+            && self.index == other.index
+            && self.tensions_n == other.tensions_n
+    }
+
     /// The tendons' moment about the backbone while they run along its tangent,
     /// `sum tau_i r_i x e3` (body frame), N m.
     pub(crate) fn straight_moment_nm(&self) -> Vector3<T> {
@@ -229,6 +236,36 @@ fn evaluate<T: Scalar>(
     Some((f, tendon_force))
 }
 
+/// `d(v, u) / d(n_l, m_l)` from the strain solve's Jacobian `J` at its answer.
+///
+/// For a Cosserat rod `J^-1`, by blocks: `J = diag(D, C) + sum tau_i / |w_i| B_i P_i B_i^T` with
+/// `B_i = (I; hat(r_i))` is symmetric positive definite, so its force block `A` and the Schur
+/// complement `S = C' - B^T A^-1 B` of its moment block are too, and
+/// `J^-1 = (A^-1 + X S^-1 X^T, -X S^-1; -S^-1 X^T, S^-1)` with `X = A^-1 B`: two 3x3 inverses.
+/// For a Kirchhoff rod `v = e3` whatever the force, and `u` follows the moment through the
+/// moment block alone: `(0, 0; 0, C'^-1)`. `None` if a block is singular (never at a finite `J`).
+fn strain_map<T: Scalar>(sec: &Section<T>, j: &SMatrix<T, 6, 6>) -> Option<SMatrix<T, 6, 6>> {
+    let moment_block = j.fixed_view::<3, 3>(3, 3).into_owned();
+    let mut out = SMatrix::<T, 6, 6>::zeros();
+    if sec.kirchhoff {
+        out.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&moment_block.try_inverse()?);
+        return Some(out);
+    }
+    let a_inv = j.fixed_view::<3, 3>(0, 0).into_owned().try_inverse()?;
+    let b = j.fixed_view::<3, 3>(0, 3).into_owned();
+    let x = a_inv * b;
+    let s_inv = (moment_block - b.tr_mul(&x)).try_inverse()?;
+    let upper_right = -(x * s_inv);
+    out.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(a_inv - upper_right * x.transpose()));
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&upper_right);
+    out.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&upper_right.transpose());
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&s_inv);
+    Some(out)
+}
+
 /// `J^-1` at the straight tendons (`v = e3`, `u = 0`, every `g_i = e3`): the chord iteration's
 /// matrix, constant along an interval. `None` if singular (never: `J` is positive definite).
 pub(crate) fn chord_matrix<T: Scalar>(
@@ -306,11 +343,7 @@ pub(crate) fn strains<T: Scalar>(
         if f1 <= force_tol && f2 <= moment_tol {
             if let Some(out) = jacobian_inverse {
                 evaluate(sec, routing, &composite, &e, &u, &mut speed, Some(&mut j))?;
-                let mut inverse = j.lu().try_inverse()?;
-                if sec.kirchhoff {
-                    inverse.fixed_columns_mut::<3>(0).fill(T::zero());
-                }
-                *out = inverse;
+                *out = strain_map(sec, &j)?;
             }
             return Some(Strains {
                 v: e + Vector3::z(),
@@ -420,6 +453,36 @@ mod tests {
                 assert!(
                     (fd - lin).norm() <= 1e-6 * lin.norm() + 1e-15,
                     "{kirchhoff} {k}: {fd:?} {lin:?}"
+                );
+            }
+        }
+    }
+
+    /// The block inverse is LU's inverse of the whole Jacobian (with the force columns zero for a
+    /// Kirchhoff rod), at tendons tilted well off the backbone.
+    #[test]
+    fn tendon_strain_map_is_the_jacobians_inverse() {
+        for kirchhoff in [false, true] {
+            let sec = section(kirchhoff);
+            let routing = routing();
+            let mut j = SMatrix::<f64, 6, 6>::zeros();
+            let mut speed = [0.0; MAX_TENDONS];
+            let e = Vector3::new(1e-5, -2e-5, 3e-5);
+            let u = Vector3::new(8.0, -5.0, 2.0);
+            let composite = SVector::<f64, 6>::zeros();
+            evaluate(&sec, &routing, &composite, &e, &u, &mut speed, Some(&mut j)).unwrap();
+            let mut reference = j.lu().try_inverse().unwrap();
+            if kirchhoff {
+                reference.fixed_columns_mut::<3>(0).fill(0.0);
+            }
+            let map = strain_map(&sec, &j).unwrap();
+            // Per block: the blocks' scales differ by orders of magnitude (E A against E I).
+            for (r, c) in [(0, 0), (0, 3), (3, 0), (3, 3)] {
+                let want = reference.fixed_view::<3, 3>(r, c).into_owned();
+                let got = map.fixed_view::<3, 3>(r, c).into_owned();
+                assert!(
+                    (got - want).norm() <= 1e-12 * want.norm(),
+                    "{kirchhoff} block ({r}, {c}): {got:?} {want:?}"
                 );
             }
         }
