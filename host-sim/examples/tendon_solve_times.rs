@@ -12,6 +12,7 @@
 //! from the reference (the same model at 800 RK4 steps per section) and the tensions. `STEPS` sets
 //! the steps per section of the timed solves (default the scene's), `CONTINUOUS_STEPS` those of the
 //! continuous routing's (default `STEPS`): at equal accuracy the two models need different grids.
+//! Lines starting with `#` give each model's RK4 steps in all.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -71,6 +72,10 @@ fn main() -> Result<(), SceneError> {
     let numbers: Vec<f64> = args.filter_map(|a| a.parse().ok()).collect();
     let scene = Scene::load(&path)?;
     let (model, tendons) = robot(&scene, env("STEPS"))?;
+    println!(
+        "# discrete guides: {} RK4 steps in all",
+        model.plan().total_steps()
+    );
     let count = tendons.len();
     let tensions: Vec<f64> = match numbers.get(..count) {
         Some(t) => t.to_vec(),
@@ -173,6 +178,10 @@ fn main() -> Result<(), SceneError> {
         Some(steps) => robot(&scene, Some(steps))?,
         None => (model, tendons),
     };
+    println!(
+        "# continuous routing: {} RK4 steps in all",
+        model.plan().total_steps()
+    );
     let continuous = || model.solve_tendons_continuous(&tendons, &tensions, &load, None, &settings);
     let c = continuous().map_err(refused("continuous"))?;
     print(

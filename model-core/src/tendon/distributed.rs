@@ -238,12 +238,13 @@ fn evaluate<T: Scalar>(
 
 /// `d(v, u) / d(n_l, m_l)` from the strain solve's Jacobian `J` at its answer.
 ///
-/// For a Cosserat rod `J^-1`, by blocks: `J = diag(D, C) + sum tau_i / |w_i| B_i P_i B_i^T` with
-/// `B_i = (I; hat(r_i))` is symmetric positive definite, so its force block `A` and the Schur
-/// complement `S = C' - B^T A^-1 B` of its moment block are too, and
-/// `J^-1 = (A^-1 + X S^-1 X^T, -X S^-1; -S^-1 X^T, S^-1)` with `X = A^-1 B`: two 3x3 inverses.
+/// For a Cosserat rod `J^-1`, by blocks: `J = diag(D, C) + sum tau_i G_i P_i G_i^T` with
+/// `P_i = (I - g_i g_i^T) / |w_i|` and `G_i = (I; hat(r_i))` is symmetric, and positive definite
+/// for positive stiffnesses and tensions of at least zero; so are its force block `A` and the
+/// Schur complement `S = M - K^T A^-1 K` of its moment block `M` (`K` the upper right block), and
+/// `J^-1 = (A^-1 + X S^-1 X^T, -X S^-1; -S^-1 X^T, S^-1)` with `X = A^-1 K`: two 3x3 inverses.
 /// For a Kirchhoff rod `v = e3` whatever the force, and `u` follows the moment through the
-/// moment block alone: `(0, 0; 0, C'^-1)`. `None` if a block is singular (never at a finite `J`).
+/// moment block alone: `(0, 0; 0, M^-1)`. `None` if a block is singular.
 fn strain_map<T: Scalar>(sec: &Section<T>, j: &SMatrix<T, 6, 6>) -> Option<SMatrix<T, 6, 6>> {
     let moment_block = j.fixed_view::<3, 3>(3, 3).into_owned();
     let mut out = SMatrix::<T, 6, 6>::zeros();
@@ -267,7 +268,8 @@ fn strain_map<T: Scalar>(sec: &Section<T>, j: &SMatrix<T, 6, 6>) -> Option<SMatr
 }
 
 /// `J^-1` at the straight tendons (`v = e3`, `u = 0`, every `g_i = e3`): the chord iteration's
-/// matrix, constant along an interval. `None` if singular (never: `J` is positive definite).
+/// matrix, the same along a section wherever the same tendons run (a sweep inverts it once there,
+/// `RodOde::next_field`). `None` if singular (never: `J` is positive definite).
 pub(crate) fn chord_matrix<T: Scalar>(
     sec: &Section<T>,
     routing: &Routing<T>,
