@@ -116,9 +116,13 @@ pub(crate) trait RodOde<T: Scalar, const K: usize>: Sized {
     fn blank_stage(&self) -> Self::Stage;
     /// The coefficients on `interval`; `None` when the scene does not have them (a corrupt plan).
     fn field(&self, interval: &Interval<T>) -> Option<Self::Field>;
-    /// The same on the interval after `previous`'s, whose coefficients it may share (a sweep
-    /// walks the plan in order); by default [`RodOde::field`].
-    fn next_field(&self, _previous: &Self::Field, interval: &Interval<T>) -> Option<Self::Field> {
+    /// The same on the interval after `previous`'s (none on the first), whose coefficients it
+    /// may share (a sweep walks the plan in order); by default [`RodOde::field`].
+    fn next_field(
+        &self,
+        _previous: Option<&Self::Field>,
+        interval: &Interval<T>,
+    ) -> Option<Self::Field> {
         self.field(interval)
     }
     /// The bending load at `(s, y)`, 1/m^4: [`bending_load`] of the internal force there.

@@ -315,31 +315,30 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
     }
 
     fn field(&self, interval: &Interval<T>) -> Option<Field<'a, T>> {
+        self.next_field(None, interval)
+    }
+
+    /// Within a section and a set of tendons, the chord matrix is the previous interval's.
+    fn next_field(
+        &self,
+        previous: Option<&Field<'a, T>>,
+        interval: &Interval<T>,
+    ) -> Option<Field<'a, T>> {
         let model: &'a Model<T, A, NODES> = self.model;
         let comp = model.compliance(interval.section)?;
         let mid = (interval.s0_m + interval.s1_m) * T::lit(0.5);
         let section = Section::new(comp, self.kirchhoff);
         let routing = Routing::along(self.tendons, self.tensions(), mid);
+        let chord = match previous {
+            Some(p) if p.section_index == interval.section && routing.same_tendons(&p.routing) => {
+                p.chord
+            }
+            _ => chord_matrix(&section, &routing)?,
+        };
         Some(Field {
             rod: self.rod.field(interval)?,
-            chord: chord_matrix(&section, &routing)?,
+            chord,
             section,
-            routing,
-            section_index: interval.section,
-        })
-    }
-
-    /// Within a section and a set of tendons, the chord matrix is the previous interval's.
-    fn next_field(&self, previous: &Field<'a, T>, interval: &Interval<T>) -> Option<Field<'a, T>> {
-        let mid = (interval.s0_m + interval.s1_m) * T::lit(0.5);
-        let routing = Routing::along(self.tendons, self.tensions(), mid);
-        if interval.section != previous.section_index || !routing.same_tendons(&previous.routing) {
-            return self.field(interval);
-        }
-        Some(Field {
-            rod: self.rod.field(interval)?,
-            chord: previous.chord,
-            section: previous.section,
             routing,
             section_index: interval.section,
         })
@@ -695,7 +694,7 @@ mod tests {
         let mut previous = ode.field(&intervals[0]).unwrap();
         let mut section_changes = 0;
         for interval in &intervals[1..] {
-            let carried = ode.next_field(&previous, interval).unwrap();
+            let carried = ode.next_field(Some(&previous), interval).unwrap();
             let fresh = ode.field(interval).unwrap();
             assert_eq!(carried.chord, fresh.chord);
             assert_eq!(carried.section.c, fresh.section.c);

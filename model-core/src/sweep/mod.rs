@@ -303,11 +303,7 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
         .unwrap_or(beyond);
 
     for (k, interval) in grid.intervals.iter().enumerate() {
-        let next = match &proximal {
-            Some(prox) => ode.next_field(prox, interval),
-            None => ode.field(interval),
-        };
-        let Some(field) = next else {
+        let Some(field) = ode.next_field(proximal.as_ref(), interval) else {
             return out;
         };
         let node = grid.nodes.get(k);
