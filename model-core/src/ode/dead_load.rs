@@ -209,6 +209,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 3>
                 Vector3::zeros(),
             ),
             Family::TipForce => (Tangent::zero(), unit::<T, 3>(j) * self.alpha),
+            Family::Tension => (Tangent::zero(), Vector3::zeros()),
         }
     }
 

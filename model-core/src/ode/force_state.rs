@@ -287,6 +287,8 @@ impl<'a, T: Scalar, A: Attitude<T>, L: ShapeLoad<T>, const NODES: usize> RodOde<
                 )
             }
             Family::TipForce => (Tangent::zero(), super::unit::<T, 3>(j) * self.alpha),
+            // The tendons' rod seeds its own tensions (`tendon.rs`).
+            Family::Tension => (Tangent::zero(), Vector3::zeros()),
         }
     }
 

@@ -31,14 +31,17 @@ use crate::plan::{Interval, Node};
 use crate::shape::ShapePoint;
 
 /// A family of tangent directions a sweep can carry, by what seeds it: a change of the shooting
-/// unknowns (`K` directions: the base strain, or the base force and moment, ...), or a change of the
-/// tip force (3 directions, for the inverse). Later families (tendon tensions) join here.
+/// unknowns (`K` directions: the base strain, or the base force and moment, ...), a change of the
+/// tip force (3 directions, for the inverse), or a change of one tendon's tension (the tendon
+/// sensitivity, `crate::tendon::sensitivity`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Family {
     /// The shooting unknowns, one direction each.
     Unknown,
     /// The tip force, along the global x, y, z axes.
     TipForce,
+    /// One tendon's tension, in the tendons' order: zero on rods without tendons.
+    Tension,
 }
 
 /// Where observers see the backbone: its position in high and low parts (the sum, compensated,

@@ -270,7 +270,7 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
                 },
                 (),
             ),
-            Family::TipForce => (Tangent::zero(), ()),
+            Family::TipForce | Family::Tension => (Tangent::zero(), ()),
         }
     }
 

@@ -79,15 +79,17 @@ impl<T: Scalar> PathChanges<T> {
         }
     }
 
-    /// Each tendon's path change along the six tangents (the unknowns') of the sweep `record`
-    /// holds, if it ran at unknowns `x` at full load, passed `guides` guides and carried them.
-    pub(crate) fn at(
+    /// Each tendon's path change along the `tangents` tangents (in their slots) of the sweep
+    /// `record` holds, if it ran at unknowns `x` at full load, passed `guides` guides and carried
+    /// them.
+    pub(crate) fn along(
         &self,
         record: &GuideRecord<T>,
         x: &SVector<T, 6>,
         guides: usize,
+        tangents: usize,
     ) -> Option<[[T; MAX_TANGENTS]; MAX_TENDONS]> {
-        let whole = record.holds(x, guides) && self.tangents.get() == 6;
+        let whole = record.holds(x, guides) && self.tangents.get() == tangents;
         whole.then(|| self.d_path.each_ref().map(Cell::get))
     }
 
@@ -973,11 +975,21 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         }
     }
 
+    /// A tension's tangent starts as a change of that tendon's tension in every chord (at the load
+    /// scale; frictionless it stays one, with capstan friction it reads the wraps at each hole);
+    /// the rod's state does not move at the base.
     fn seed(&self, family: Family, j: usize) -> (Tangent<T>, Vector3<T>) {
         let (rod, seed) = self.rod.seed(family, j);
+        let mut d_chord_n = [T::zero(); MAX_TENDONS];
+        if family == Family::Tension
+            && let Some(d) = d_chord_n.get_mut(j)
+        {
+            *d = self.rod.alpha();
+        }
         (
             Tangent {
                 rod,
+                d_chord_n,
                 ..Tangent::zero()
             },
             seed,

@@ -293,8 +293,14 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 6>
         }
     }
 
+    /// The tensions' tangents are not traced along continuous routing: a sweep asked for one is
+    /// not finite (never a zero derivative that reads as exact).
     fn seed(&self, family: super::Family, j: usize) -> (force_state::Tangent<T>, Vector3<T>) {
-        self.rod.seed(family, j)
+        let (mut tangent, seed) = self.rod.seed(family, j);
+        if family == super::Family::Tension {
+            tangent.n = Vector3::repeat(T::lit(f64::NAN));
+        }
+        (tangent, seed)
     }
 
     fn no_seed(&self) -> Vector3<T> {

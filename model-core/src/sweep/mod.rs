@@ -8,7 +8,8 @@
 //! watch (`crate::stability`). At the tip the equations give the residual of the tip condition.
 //!
 //! Alongside the state the sweep can carry up to [`MAX_TANGENTS`] tangents, by family (the shooting
-//! unknowns, then the tip force). The tangent count is a run-time number, so each set of equations
+//! unknowns, then the tip force; or, at fixed unknowns, the tip force and the tendons' tensions).
+//! The tangent count is a run-time number, so each set of equations
 //! has one compiled sweep (the firmware's flash is small), and a plain sweep pays nothing for
 //! tangents.
 
@@ -27,13 +28,14 @@ use cables::CableTraces;
 /// Most tangent directions a sweep carries.
 pub(crate) const MAX_TANGENTS: usize = 6;
 
-/// Which tangents a sweep carries: the shooting unknowns' (a Newton iteration, the stability test),
-/// and after them the tip force's (the inverse), and whether to watch for conjugate points (which
-/// needs the unknowns').
+/// Which tangents a sweep carries, in this order: the shooting unknowns' (a Newton iteration, the
+/// stability test), the tip force's (the inverse), the tendons' tensions' (the tendon
+/// sensitivity); and whether to watch for conjugate points (which needs the unknowns').
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct TangentSet {
     unknowns: bool,
     tip_force: bool,
+    tensions: u8,
     track_stability: bool,
 }
 
@@ -42,6 +44,7 @@ impl TangentSet {
     pub const NONE: Self = Self {
         unknowns: false,
         tip_force: false,
+        tensions: 0,
         track_stability: false,
     };
 
@@ -49,8 +52,8 @@ impl TangentSet {
     pub fn unknowns(track_stability: bool) -> Self {
         Self {
             unknowns: true,
-            tip_force: false,
             track_stability,
+            ..Self::NONE
         }
     }
 
@@ -60,27 +63,84 @@ impl TangentSet {
             unknowns: true,
             tip_force: true,
             track_stability,
+            ..Self::NONE
+        }
+    }
+
+    /// The parameters' tangents alone, at fixed unknowns: the tip force's (when `tip_force`) and
+    /// the first `tensions` tendons' tensions'.
+    pub fn parameters(tip_force: bool, tensions: usize) -> Self {
+        Self {
+            tip_force,
+            tensions: u8::try_from(tensions.min(MAX_TANGENTS)).unwrap_or(0),
+            ..Self::NONE
         }
     }
 
     /// How many slots, for `K` unknowns (at most [`MAX_TANGENTS`]).
-    fn count<const K: usize>(&self) -> usize {
-        let n = if self.unknowns { K } else { 0 } + if self.tip_force { 3 } else { 0 };
-        n.min(MAX_TANGENTS)
+    pub fn count<const K: usize>(&self) -> usize {
+        let force = if self.tip_force { 3 } else { 0 };
+        if self.unknowns {
+            (K + force).min(MAX_TANGENTS)
+        } else {
+            (force + usize::from(self.tensions)).min(MAX_TANGENTS)
+        }
     }
 
-    /// The family and index of slot `j`.
-    fn family<const K: usize>(j: usize) -> (Family, usize) {
-        if j < K {
-            (Family::Unknown, j)
+    /// The family and index of slot `j`. Out of line, and with the unknowns' layout first (the
+    /// sweeps of the solves and the estimator): the sweep stays small (the controller's flash).
+    #[inline(never)]
+    fn family<const K: usize>(&self, j: usize) -> (Family, usize) {
+        if self.unknowns {
+            if j < K {
+                (Family::Unknown, j)
+            } else {
+                (Family::TipForce, j - K)
+            }
+        } else if self.tip_force && j < 3 {
+            (Family::TipForce, j)
         } else {
-            (Family::TipForce, j - K)
+            (Family::Tension, j - if self.tip_force { 3 } else { 0 })
         }
+    }
+
+    /// Where each family's tangents lie, `[first slot, how many]` by [`Family`] (within
+    /// [`MAX_TANGENTS`]: see [`TangentSet::count`]), in [`TangentSet::family`]'s layout.
+    fn layout<const K: usize>(&self) -> [[u8; 2]; 3] {
+        let room = |first: usize, len: usize| {
+            let first = first.min(MAX_TANGENTS);
+            // (At most MAX_TANGENTS: fits a byte.)
+            [first as u8, len.min(MAX_TANGENTS - first) as u8]
+        };
+        let unknowns = if self.unknowns { K } else { 0 };
+        let force = if self.tip_force { 3 } else { 0 };
+        let tensions = if self.unknowns {
+            0
+        } else {
+            usize::from(self.tensions)
+        };
+        [
+            room(0, unknowns),
+            room(unknowns, force),
+            room(unknowns + force, tensions),
+        ]
+    }
+
+    /// The slot of tangent `j` of `family`, if the set has it.
+    pub fn slot<const K: usize>(&self, family: Family, j: usize) -> Option<usize> {
+        slot_in(&self.layout::<K>(), family, j)
     }
 }
 
-/// Everything one sweep produces. Tangent arrays hold [`Sweep::tangents`] valid entries, by family:
-/// the `K` unknowns first, then the tip force's three.
+/// The slot of tangent `j` of `family` in `layout` ([`TangentSet::layout`]).
+fn slot_in(layout: &[[u8; 2]; 3], family: Family, j: usize) -> Option<usize> {
+    let [first, len] = *layout.get(family as usize)?;
+    (j < usize::from(len)).then_some(usize::from(first) + j)
+}
+
+/// Everything one sweep produces. The tangent arrays hold the sweep's tangents in the slots its
+/// [`TangentSet`] laid out: the `K` unknowns first, then the tip force's three, or the
+/// parameters' alone (the tip force's, then the tensions').
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sweep<T, const K: usize> {
     pub tip_position_m: Vector3<T>,
@@ -93,8 +153,8 @@ pub(crate) struct Sweep<T, const K: usize> {
     d_tip_position: [Vector3<T>; MAX_TANGENTS],
     /// Tip rotation perturbation, body frame.
     d_tip_rotation: [Vector3<T>; MAX_TANGENTS],
-    /// How many tangents the arrays hold.
-    tangents: usize,
+    /// Where each family's tangents lie in the arrays ([`TangentSet::layout`]).
+    layout: [[u8; 2]; 3],
     /// First arc length where a conjugate point was found (only when tracked).
     pub conjugate_point_m: Option<T>,
     /// Largest `|R^T R - I|` met at the nodes.
@@ -116,7 +176,7 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
             d_cable: [[T::zero(); MAX_TANGENTS]; MAX_CABLES],
             d_tip_position: [Vector3::zeros(); MAX_TANGENTS],
             d_tip_rotation: [Vector3::zeros(); MAX_TANGENTS],
-            tangents: 0,
+            layout: [[0; 2]; 3],
             conjugate_point_m: None,
             frame_drift: T::zero(),
             phase_per_step_rad: T::zero(),
@@ -126,11 +186,7 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
 
     /// The slot of tangent `j` of `family`, if the sweep carried it.
     fn slot(&self, family: Family, j: usize) -> Option<usize> {
-        let slot = match family {
-            Family::Unknown => (j < K).then_some(j),
-            Family::TipForce => (j < 3).then_some(K + j),
-        }?;
-        (slot < self.tangents).then_some(slot)
+        slot_in(&self.layout, family, j)
     }
 
     /// Tangent `j` of `family`'s change of the tip rotation, body frame (zero when not carried).
@@ -147,6 +203,14 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
             .and_then(|j| self.d_tip_position.get(j))
             .copied()
             .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Tangent `j` of `family`'s change of the tip condition's residual (zero when not carried).
+    pub fn d_residual(&self, family: Family, j: usize) -> SVector<T, K> {
+        self.slot(family, j)
+            .and_then(|j| self.d_residual.get(j))
+            .copied()
+            .unwrap_or_else(SVector::zeros)
     }
 
     /// The first `N` tangents of `family` as the columns of a matrix: `column(slot)` for each slot
@@ -196,7 +260,7 @@ impl<T: Scalar, const K: usize> Sweep<T, K> {
 
     /// Whether the sweep carried the unknowns' tangents (has a [`Sweep::jacobian`]).
     pub fn has_jacobian(&self) -> bool {
-        self.tangents >= K
+        self.slot(Family::Unknown, K - 1).is_some()
     }
 
     /// The shooting Jacobian `d residual / d unknowns`.
@@ -278,7 +342,7 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
     let mut seeds = [ode.no_seed(); MAX_TANGENTS];
     let mut tan = [O::Tangent::zero(); MAX_TANGENTS];
     for (j, (t, seed)) in tan.iter_mut().zip(seeds.iter_mut()).enumerate().take(count) {
-        let (family, index) = TangentSet::family::<K>(j);
+        let (family, index) = which.family::<K>(j);
         (*t, *seed) = ode.seed(family, index);
     }
     let (seeds, tan) = (
@@ -411,7 +475,7 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
     }
     out.tip_position_m = pose.position_m + pose.position_lo_m;
     out.tip_rotation = pose.rotation;
-    out.tangents = count;
+    out.layout = which.layout::<K>();
     out.conjugate_point_m = conjugate_point_m;
     out.frame_drift = frame_drift;
     out.phase_per_step_rad = phase4.sqrt().sqrt();
@@ -420,4 +484,46 @@ pub(crate) fn sweep<T: Scalar, O: RodOde<T, K>, const K: usize>(
         && out.d_cable.iter().flatten().all(|x| x.is_finite())
         && out.d_residual.iter().all(crate::scalar::all_finite);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two views of a set's layout agree: every slot's family and index lead back to it, and
+    /// no family and index beyond the set has a slot (three and six unknowns, the tip force, the
+    /// parameters with none to more tensions than fit).
+    #[test]
+    fn tangent_sets_slots_and_families_agree() {
+        fn check<const K: usize>(set: TangentSet, expected: usize) {
+            assert_eq!(set.count::<K>(), expected, "{set:?}");
+            for slot in 0..expected {
+                let (family, j) = set.family::<K>(slot);
+                assert_eq!(set.slot::<K>(family, j), Some(slot), "{set:?} slot {slot}");
+            }
+            let mut found = 0;
+            for family in [Family::Unknown, Family::TipForce, Family::Tension] {
+                for j in 0..2 * MAX_TANGENTS {
+                    if let Some(slot) = set.slot::<K>(family, j) {
+                        assert!(slot < expected, "{set:?}: {family:?} {j} at {slot}");
+                        found += 1;
+                    }
+                }
+            }
+            assert_eq!(found, expected, "{set:?}");
+        }
+        check::<3>(TangentSet::NONE, 0);
+        check::<3>(TangentSet::unknowns(true), 3);
+        check::<3>(TangentSet::with_tip_force(false), 6);
+        check::<6>(TangentSet::unknowns(false), 6);
+        // Six unknowns leave the tip force no room.
+        check::<6>(TangentSet::with_tip_force(false), 6);
+        for tensions in 0..=8 {
+            check::<6>(TangentSet::parameters(false, tensions), tensions.min(6));
+            check::<6>(
+                TangentSet::parameters(true, tensions),
+                (3 + tensions).min(6),
+            );
+        }
+    }
 }

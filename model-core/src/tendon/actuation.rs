@@ -12,7 +12,8 @@
 //! `FB(tau / tau_s, phi / r) = a + b - sqrt(a^2 + b^2) = 0` (Fischer-Burmeister) by a semi-smooth
 //! Newton with a backtracking line search; `tau_s` bends the rod about a radian through the largest
 //! offset `r`. Each iteration is a forward solve from tensions (`forward.rs`), warm, and the path's
-//! sensitivity to the tensions (`sensitivity.rs`).
+//! sensitivity to the tensions (`sensitivity.rs`: from tangents, frictionless; else differences),
+//! carried with Broyden's secants between fresh ones.
 
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
@@ -77,15 +78,16 @@ pub struct DisplacementSolve<T> {
     pub iterations: u16,
     /// Sweeps spent, forward solves and sensitivities together.
     pub sweeps: u32,
-    /// How the needed unstretched lengths change with the tensions near the answer, m/N (forward
-    /// differences, refined by Broyden updates along the steps): what a warm update
-    /// ([`Model::update_displacements`]) starts from instead of differencing again.
+    /// How the needed unstretched lengths change with the tensions near the answer, m/N (from
+    /// tangents, or with capstan friction forward differences; refined by Broyden updates along the
+    /// steps): what a warm update ([`Model::update_displacements`]) starts from instead of forming
+    /// it again.
     pub d_length_d_tension: SMatrix<T, MAX_TENDONS, MAX_TENDONS>,
     /// Whether [`DisplacementSolve::d_length_d_tension`] holds a sensitivity (not after a failure
     /// before the first one).
     pub has_sensitivity: bool,
     /// How the base's internal force (N, rows 0-2) and moment (N m, rows 3-5) change with the
-    /// tensions, per N (secants along the steps taken, or differences with the sensitivity): each
+    /// tensions, per N (secants along the steps taken, or the sensitivity's): each
     /// forward solve of a step starts where it predicts, a warm update's too. Zero until a step
     /// was taken.
     pub d_base_d_tension: SMatrix<T, 6, MAX_TENDONS>,
@@ -156,8 +158,8 @@ const CHORD_REACH: f64 = 16.0;
 /// to its iteration limit; it feeds that inverse's gradient, the base's only starts.)
 const SECANT_FLOOR: f64 = 64.0;
 
-/// How far above the rounding floor a step must end for its slow gain to difference the
-/// sensitivity afresh: closer, no sensitivity can show a gain of four.
+/// How far above the rounding floor a step must end for its slow gain to form the sensitivity
+/// afresh: closer, no sensitivity can show a gain of four.
 const REDIFFERENCE_FLOOR: f64 = 4.0;
 
 /// Newton iterations of the forward solve a joint step starts (`joint_step.rs`): from a tracking
@@ -322,8 +324,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     }
 
     /// The warm update of a control loop: the tensions for new displacements, from `previous`'s
-    /// equilibrium and its sensitivities (Broyden-updated along the steps; differenced afresh
-    /// when a step fails or gains too little). `previous` must come from this model and these
+    /// equilibrium and its sensitivities (Broyden-updated along the steps; formed afresh when a
+    /// step fails or gains too little). `previous` must come from this model and these
     /// tendons (their sliding may have changed since: that is seen). Same outcome as
     /// [`Model::solve_displacements`], at a fraction of the sweeps.
     pub fn update_displacements(
@@ -418,7 +420,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
 
         let mut termination = Termination::IterationLimit;
         let mut iterations = 0u16;
-        // d N / d tau, and whether it was differenced at the current point (else carried and
+        // d N / d tau, and whether it was formed at the current point (else carried and
         // Broyden-updated).
         let tracking = Tracking {
             tangent: self.rod().base_orientation.column(2).into_owned(),
@@ -569,12 +571,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
             match accepted {
                 Some((trial, moved, dt, r_new)) => {
-                    // A carried sensitivity that gained less than a factor four is differenced
-                    // afresh next time: Broyden's secants alone converge slowly near the answer,
-                    // and differencing costs a forward solve per tendon, a Broyden step one. Not
-                    // within four times the rounding floor: there, a fresh sensitivity could not
-                    // gain a factor four either (on the two-section robot in f32 most ticks ended
-                    // on a step to twice the floor and differenced six tendons afresh).
+                    // A carried sensitivity that gained less than a factor four is formed afresh
+                    // next time: Broyden's secants alone converge slowly near the answer, and a
+                    // fresh one costs two or three sweeps with tangents (differences with
+                    // friction: a forward solve per tendon), a Broyden step none. Not within four
+                    // times the rounding floor: there, a fresh sensitivity could not gain a factor
+                    // four either (on the two-section robot in f32 most ticks ended on a step to
+                    // twice the floor and differenced six tendons afresh).
                     let slow = !fresh
                         && r_new > size * T::lit(0.25)
                         && r_new > floor * T::lit(REDIFFERENCE_FLOOR);
@@ -599,7 +602,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     current = moved;
                 }
                 None if !fresh => {
-                    // A carried sensitivity misled the step: difference afresh and retry.
+                    // A carried sensitivity misled the step: form it afresh and retry.
                     sens = None;
                 }
                 None => {

@@ -23,7 +23,9 @@
 //! becomes observable (intrinsic force sensing). Consistency needs data to spare: without, the
 //! verdict is at best [`Determination::Weak`]. After a fit the search for other answers restarts
 //! from tip forces of a few buckling scales along each axis: another fit as good and far from the
-//! answer makes it [`Determination::Ambiguous`] (MODEL.md §6.4).
+//! answer makes it [`Determination::Ambiguous`]. A cold fit that does not converge from its start
+//! (a valley where a tendon the measured tensions say is taut is slack) fits again from those
+//! starts before it fails (MODEL.md §6.4).
 
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
@@ -373,7 +375,7 @@ struct Outcome<T> {
 
 impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
     /// The step below which a fit has converged, in standard deviations of the fit: what the
-    /// forward differences resolve in the scalar type.
+    /// sensitivity resolves in the scalar type (forward differences, with friction).
     fn step_tolerance_sigma() -> T {
         (T::default_epsilon() * T::lit(1e4)).max(T::lit(1e-5))
     }
@@ -828,6 +830,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             Err(t) => return Ok(problem.failed(&theta, t)),
         };
         let mut best = problem.finish(outcome);
+        if !best.is_success() && start.is_none() {
+            // From the start the fit can run into a valley where a tendon the measured tensions
+            // say is taut is slack: its tension then stays zero whatever the force, so its misfit
+            // shows the fit no way out. A cold estimate tries the search's starts before it fails.
+            if let Some(rescued) = problem.rescue(&theta)? {
+                best = rescued;
+            }
+        }
         if !best.is_success() {
             return Ok(best);
         }
@@ -979,6 +989,34 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         self.settings.max_iterations = full;
         best.quality.determination = verdict;
         Ok(())
+    }
+
+    /// Fits from the search's starts around `theta` (see [`Problem::search`]), each with the full
+    /// budget: the converged one with the smallest misfit, if any.
+    fn rescue(&mut self, theta: &Theta<T>) -> Result<Option<TendonEstimate<T>>, ModelError> {
+        let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
+        let mut best: Option<(T, Outcome<T>)> = None;
+        if scale <= T::zero() {
+            return Ok(None);
+        }
+        for axis in 0..3 {
+            for sign in [T::one(), -T::one()] {
+                let mut start = *theta;
+                if let Some(f) = start.get_mut(self.count + axis) {
+                    *f += sign * scale;
+                }
+                let force0 = self.load(&start).force_n;
+                let Ok(outcome) = self.fit(force0, None)? else {
+                    continue;
+                };
+                let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
+                if outcome.termination.is_success() && best.as_ref().is_none_or(|(c, _)| cost < *c)
+                {
+                    best = Some((cost, outcome));
+                }
+            }
+        }
+        Ok(best.map(|(_, outcome)| self.finish(outcome)))
     }
 
     /// The sum of squares at `theta` on `solved`.

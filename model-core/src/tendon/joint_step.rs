@@ -135,7 +135,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
     ) -> Option<JointStep<T>> {
         let count = tendons.len();
         let guides = tendons.guide_s_m.len();
-        let d_path = paths.at(record, x, guides)?;
+        let d_path = paths.along(record, x, guides, 6)?;
         let poses = record.poses_at(x, guides)?;
         let rod = self.rod();
         let now = lengths(
@@ -213,7 +213,7 @@ mod tests {
             .tracing_paths(&traced);
         let x = ode.guess() * 0.7;
         assert!(sweep(&ode, &x, TangentSet::unknowns(false), None).finite);
-        let d = traced.at(&record, &x, guides).unwrap();
+        let d = traced.along(&record, &x, guides, 6).unwrap();
         let paths = |x: &SVector<f64, 6>| {
             let plain = GuideRecord::new();
             let untraced = PathChanges::new();
@@ -221,7 +221,7 @@ mod tests {
                 .recording(&plain)
                 .tracing_paths(&untraced);
             assert!(sweep(&ode, x, TangentSet::NONE, None).finite);
-            assert!(untraced.at(&plain, x, guides).is_none());
+            assert!(untraced.along(&plain, x, guides, 6).is_none());
             let poses = plain.poses_at(x, guides).unwrap();
             lengths(
                 &tendons,

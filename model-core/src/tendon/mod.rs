@@ -99,6 +99,18 @@ impl<T: Scalar> Tendon<T> {
             None => length_m,
         }
     }
+
+    /// [`Tendon::unstretched_m`]'s change per unit tension, m/N:
+    /// `-l / (E_t A_t (1 + tau / E_t A_t)^2)` (zero for an inextensible tendon).
+    pub(crate) fn d_unstretched_d_tension(&self, length_m: T, tension_n: T) -> T {
+        match self.axial_stiffness_n {
+            Some(k) => {
+                let f = T::one() + tension_n / k;
+                -length_m / (k * f * f)
+            }
+            None => T::zero(),
+        }
+    }
 }
 
 /// Which way a tendon slides through its holes, which sets the sign of the capstan friction: the
