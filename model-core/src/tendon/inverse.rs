@@ -829,16 +829,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             Ok(o) => o,
             Err(t) => return Ok(problem.failed(&theta, t)),
         };
+        let stopped_at = Problem::<T, A, NODES>::cost(&outcome.fit);
         let mut best = problem.finish(outcome);
         if !best.is_success() && start.is_none() {
             // From the start the fit can run into a valley where a tendon the measured tensions
             // say is taut is slack: its tension then stays zero whatever the force, so its misfit
-            // shows the fit no way out. A cold estimate tries the search's starts before it fails.
-            if let Some(rescued) = problem.rescue(&theta)? {
+            // shows the fit no way out. A cold estimate tries the search's starts before it fails
+            // (a rescue must fit better than where the fit stopped).
+            if let Some(rescued) = problem.rescue(&theta, stopped_at)? {
                 best = rescued;
             }
         }
         if !best.is_success() {
+            best.sweeps = problem.sweeps;
             return Ok(best);
         }
         match start {
@@ -992,8 +995,12 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
     }
 
     /// Fits from the search's starts around `theta` (see [`Problem::search`]), each with the full
-    /// budget: the converged one with the smallest misfit, if any.
-    fn rescue(&mut self, theta: &Theta<T>) -> Result<Option<TendonEstimate<T>>, ModelError> {
+    /// budget: the converged one with the smallest misfit below `below`, if any.
+    fn rescue(
+        &mut self,
+        theta: &Theta<T>,
+        below: T,
+    ) -> Result<Option<TendonEstimate<T>>, ModelError> {
         let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
         let mut best: Option<(T, Outcome<T>)> = None;
         if scale <= T::zero() {
@@ -1010,7 +1017,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                     continue;
                 };
                 let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
-                if outcome.termination.is_success() && best.as_ref().is_none_or(|(c, _)| cost < *c)
+                if outcome.termination.is_success()
+                    && cost < below
+                    && best.as_ref().is_none_or(|(c, _)| cost < *c)
                 {
                     best = Some((cost, outcome));
                 }

@@ -11,7 +11,8 @@
 //! share. Two or three sweeps where differences take a warm solve per column.
 //!
 //! With capstan friction (the chords' tensions read the wrap angles, which the tangents do not
-//! carry into the stretch), or where a sweep fails, by forward differences of warm solves (each a
+//! carry into the stretch), with more than six tendons (a sweep's slots), or where a sweep fails or
+//! its result is not finite, by forward differences of warm solves (each a
 //! few sweeps from the equilibrium it perturbs). Their step is a fixed fraction
 //! (`max(2 eps^(1/3), 1e-3)`) of the tension that bends the rod by about a radian (`E I / (L r)`)
 //! and of the force that does (`E I / L^2`): large enough to stand above the solves' own error
@@ -150,8 +151,9 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
     Ok(Ok(out))
 }
 
-/// The sensitivity of `at` from tangents (see the module's doc), frictionless, into `out`; `false`
-/// where a sweep is not finite or does not pass every guide (`out` is then partly written). Out
+/// The sensitivity of `at` from tangents (see the module's doc), frictionless, at most six tendons
+/// (a sweep's slots), into `out`; `false` where a sweep is not finite or does not pass every
+/// guide, or the result is not finite (`out` is then partly written). Out
 /// of line, one parameter at a time on six-vectors: its records and sweeps stay out of the
 /// displacement solve's frame, and the controller's flash takes no wider matrices.
 #[inline(never)]
@@ -164,6 +166,10 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
     out: &mut Sensitivity<T>,
 ) -> bool {
     let count = tendons.len();
+    // More tensions than a sweep's slots (seven to twelve tendons): the differences.
+    if count > MAX_TANGENTS {
+        return false;
+    }
     let guides = tendons.guide_s_m.len();
     // A tendon without tension pulls with none of its chords, and the guides' loads pass it by
     // (its chords' directions with it): it is traced at `eps^2` of the tension scale, a tension no
@@ -193,6 +199,11 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
     let d_tip_dx: [Vector3<T>; 6] =
         core::array::from_fn(|k| unknowns.d_position(Family::Unknown, k));
     out.sweeps = 1;
+    // Whether every length entry written is finite: a nearly singular `J` (or f32's range) could
+    // leave what no solve would, never to be taken for an answer. A non-finite `dx` reaches every
+    // length entry (through the paths' changes along it); the tip's and the base's columns come
+    // from the same `dx` and the sweep's finite tangents.
+    let mut finite = true;
     // The tensions' tangents and the tip force's, in one sweep where they fit.
     let together = with_force && count + 3 <= MAX_TANGENTS;
     let runs = if with_force && !together { 2 } else { 1 };
@@ -210,10 +221,12 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
         else {
             return false;
         };
-        let parameters = (0..count)
-            .map(|c| (Family::Tension, c))
-            .chain((0..3).map(|c| (Family::TipForce, c)));
-        for (family, c) in parameters {
+        for p in 0..count + 3 {
+            let (family, c) = if p < count {
+                (Family::Tension, p)
+            } else {
+                (Family::TipForce, p - count)
+            };
             let Some(slot) = which.slot::<6>(family, c) else {
                 continue;
             };
@@ -256,6 +269,7 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
                 };
                 if let Some(e) = entry {
                     *e = t.unstretched_m(d_path, *tension) + own;
+                    finite = finite && e.is_finite();
                 }
             }
             if family == Family::Tension {
@@ -268,7 +282,7 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
             }
         }
     }
-    true
+    finite
 }
 
 #[cfg(test)]
@@ -299,6 +313,40 @@ mod tests {
             let tendons = Tendons::new(&model, &list[..count]).unwrap();
             let tau = &[2.0, 1.5, 0.0, 1.0][..count];
             matches_differences(&model, &tendons, tau, sweeps);
+        }
+    }
+
+    /// Seven tendons do not fit a sweep's six slots: no traced sensitivity, the differences
+    /// instead (a warm solve per tendon), every column written.
+    #[test]
+    fn tendon_sensitivity_of_seven_tendons_is_differenced() {
+        let (model, _) = crate::ode::tendon::tests::scene();
+        let list: [Tendon<f64>; 7] =
+            core::array::from_fn(|k| Tendon::at_angle(0.9 * k as f64, 0.01, 0.3));
+        let tendons = Tendons::new(&model, &list).unwrap();
+        let tau = [1.0, 0.5, 0.0, 0.8, 0.3, 0.0, 0.6];
+        let load = TipLoad::zero();
+        let settings = ShootingSettings::default();
+        let at = model
+            .solve_tendons(&tendons, &tau, &load, None, &settings)
+            .unwrap();
+        assert!(at.is_success());
+        let mut traced_out = Sensitivity::zero();
+        assert!(!traced(
+            &model,
+            &tendons,
+            &at,
+            &load,
+            false,
+            &mut traced_out
+        ));
+        let differenced = sensitivity(&model, &tendons, &at, &load, false, &settings)
+            .unwrap()
+            .unwrap();
+        assert!(differenced.sweeps >= 7, "{} sweeps", differenced.sweeps);
+        for c in 0..7 {
+            // Pulling a tendon shortens its own path.
+            assert!(differenced.d_length_d_tension[(c, c)] < 0.0, "column {c}");
         }
     }
 

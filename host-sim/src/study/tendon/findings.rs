@@ -353,8 +353,8 @@ fn actuation_paragraph(study: &TendonStudy) -> String {
     format!(
         "**From tensions or from displacements** (discrete guides, {} steps per section, per \
          solve, against a cold solve from tensions): {}. Displacement control pays for its \
-         sensitivity (forward differences, one warm solve per tendon) and its semi-smooth Newton \
-         iterations; its warm update keeps the sensitivity (Broyden) and starts at the last \
+         sensitivity (frictionless, two or three sweeps with tangents; with friction, forward \
+         differences, one warm solve per tendon) and its semi-smooth Newton iterations; its warm update keeps the sensitivity (Broyden) and starts at the last \
          tensions, but, like the cold solve, it iterates on to the rounding floor while it still \
          improves ({}). From displacements the grid's error in the path lengths becomes an error in the \
          tensions (up to {} N here, f64), which moves the tip otherwise than the same grid driven \
