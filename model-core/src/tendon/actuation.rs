@@ -271,6 +271,11 @@ impl<T: Scalar> Tendons<T> {
         out
     }
 
+    /// Whether no tendon has capstan friction.
+    pub(crate) fn frictionless(&self) -> bool {
+        self.routed.iter().all(|r| r.capstan_per_rad == T::zero())
+    }
+
     /// Tendon `j`'s unstretched length at home (the straight, unloaded rod at zero tension), spool
     /// to termination, m.
     pub(crate) fn home_length_m(&self, j: usize) -> T {
@@ -432,7 +437,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // problem (so not the tendon inverse's fits, whose trial forces change the load: an earlier
         // form with joint steps in every solve left its moving-load test at 40 iterations where
         // plain steps take 14), without capstan friction.
-        let joint = same && tendons.capstans().iter().all(|c| *c == T::zero());
+        let joint = same && tendons.frictionless();
         let mut sens = carried.map(|c| *c.sensitivities.d_length_d_tension);
         let mut d_base = carried.map_or_else(SMatrix::zeros, |c| *c.sensitivities.d_base_d_tension);
         let mut fresh = false;

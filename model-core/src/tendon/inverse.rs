@@ -931,7 +931,6 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
                 .at_best(Determination::Unverified);
             return Ok(());
         }
-        let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
         let nine = T::lit(9.0);
         let mut verdict = best.quality.determination;
         // A restart gets a dozen iterations: one that has not come within reach of the answer's
@@ -952,77 +951,80 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         };
         let answer = best_theta(best, self.count);
         let best_cost = self.cost_of(&answer, &best.solved)?;
-        for axis in 0..3 {
-            for sign in [T::one(), -T::one()] {
-                let mut theta = answer;
-                if let Some(f) = theta.get_mut(self.count + axis) {
-                    *f += sign * scale;
-                }
-                let force0 = self.load(&theta).force_n;
-                let Ok(outcome) = self.fit(force0, None)? else {
-                    continue;
-                };
-                let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
-                if cost > best_cost + nine {
-                    continue;
-                }
-                if !outcome.termination.is_success() {
-                    verdict = verdict.at_best(Determination::Unverified);
-                    continue;
-                }
-                let apart = self.apart_sigma(&outcome.fit.theta, &answer, best);
-                if apart <= T::lit(3.0) {
-                    continue;
-                }
-                if cost + nine < best_cost {
-                    // A clearly better answer: it replaces this one, and the search does not vouch
-                    // for it (it was not searched around).
-                    let mut better = self.finish(outcome);
-                    better.quality.determination = better
-                        .quality
-                        .determination
-                        .at_best(Determination::Unverified);
-                    *best = better;
-                    self.settings.max_iterations = full;
-                    return Ok(());
-                }
-                verdict = Determination::Ambiguous;
+        for force0 in self.scan_starts(&answer) {
+            let Ok(outcome) = self.fit(force0, None)? else {
+                continue;
+            };
+            let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
+            if cost > best_cost + nine {
+                continue;
             }
+            if !outcome.termination.is_success() {
+                verdict = verdict.at_best(Determination::Unverified);
+                continue;
+            }
+            let apart = self.apart_sigma(&outcome.fit.theta, &answer, best);
+            if apart <= T::lit(3.0) {
+                continue;
+            }
+            if cost + nine < best_cost {
+                // A clearly better answer: it replaces this one, and the search does not vouch
+                // for it (it was not searched around).
+                let mut better = self.finish(outcome);
+                better.quality.determination = better
+                    .quality
+                    .determination
+                    .at_best(Determination::Unverified);
+                *best = better;
+                self.settings.max_iterations = full;
+                return Ok(());
+            }
+            verdict = Determination::Ambiguous;
         }
         self.settings.max_iterations = full;
         best.quality.determination = verdict;
         Ok(())
     }
 
-    /// Fits from the search's starts around `theta` (see [`Problem::search`]), each with the full
+    /// The search's starts around `theta`: its tip force moved by `scan_reach` buckling scales
+    /// (`E I / L^2`) along each axis, both signs (none with `scan_reach = 0`).
+    fn scan_starts(&self, theta: &Theta<T>) -> heapless::Vec<Vector3<T>, 6> {
+        let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
+        let force = self.load(theta).force_n;
+        let mut starts = heapless::Vec::new();
+        if scale > T::zero() {
+            for axis in 0..3 {
+                for sign in [T::one(), -T::one()] {
+                    let mut start = force;
+                    if let Some(f) = start.get_mut(axis) {
+                        *f += sign * scale;
+                    }
+                    // Cannot overflow: six starts.
+                    let _ = starts.push(start);
+                }
+            }
+        }
+        starts
+    }
+
+    /// Fits from the search's starts around `theta` ([`Problem::scan_starts`]), each with the full
     /// budget: the converged one with the smallest misfit below `below`, if any.
     fn rescue(
         &mut self,
         theta: &Theta<T>,
         below: T,
     ) -> Result<Option<TendonEstimate<T>>, ModelError> {
-        let scale = self.model.moment_scale_nm() / self.model.length_m() * self.settings.scan_reach;
         let mut best: Option<(T, Outcome<T>)> = None;
-        if scale <= T::zero() {
-            return Ok(None);
-        }
-        for axis in 0..3 {
-            for sign in [T::one(), -T::one()] {
-                let mut start = *theta;
-                if let Some(f) = start.get_mut(self.count + axis) {
-                    *f += sign * scale;
-                }
-                let force0 = self.load(&start).force_n;
-                let Ok(outcome) = self.fit(force0, None)? else {
-                    continue;
-                };
-                let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
-                if outcome.termination.is_success()
-                    && cost < below
-                    && best.as_ref().is_none_or(|(c, _)| cost < *c)
-                {
-                    best = Some((cost, outcome));
-                }
+        for force0 in self.scan_starts(theta) {
+            let Ok(outcome) = self.fit(force0, None)? else {
+                continue;
+            };
+            let cost = Problem::<T, A, NODES>::cost(&outcome.fit);
+            if outcome.termination.is_success()
+                && cost < below
+                && best.as_ref().is_none_or(|(c, _)| cost < *c)
+            {
+                best = Some((cost, outcome));
             }
         }
         Ok(best.map(|(_, outcome)| self.finish(outcome)))

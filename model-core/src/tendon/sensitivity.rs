@@ -95,9 +95,7 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
     settings: &ShootingSettings<T>,
 ) -> Result<Result<Sensitivity<T>, Termination>, ModelError> {
     let mut out = Sensitivity::zero();
-    if tendons.capstans().iter().all(|c| *c == T::zero())
-        && traced(model, tendons, at, load, with_force, &mut out)
-    {
+    if tendons.frictionless() && traced(model, tendons, at, load, with_force, &mut out) {
         return Ok(Ok(out));
     }
     // (The differences below write every column the traced sensitivity may have begun; its
