@@ -273,14 +273,16 @@ where
             return (residual, Termination::Singular);
         };
         // At the rounding floor the residual stops decreasing. A Newton correction that turns the base
-        // and moves the tip by less than the tolerance may mean the answer is as good as the scalar
-        // type allows: it is when the tip move is negligible outright, or when the correction, tried,
-        // no longer lowers the residual. On a badly conditioned rod a correction that small can still
-        // lower the residual a hundredfold and move the tip by a tenth of a millimetre.
+        // by less than the tolerance or a long sweep's floor (`stopping::correction_at_floor`) and
+        // moves the tip by less than the tolerance may mean the answer is as good as the scalar type
+        // allows: it is when the tip move is negligible outright, or when the
+        // correction, tried, no longer lowers the residual. On a badly conditioned rod a correction
+        // that small can still lower the residual a hundredfold and move the tip by a tenth of a
+        // millimetre.
         let tip_move = sw.tip_move_m(&step);
         let at_floor = options.to_rounding
             && mu == T::zero()
-            && stopping::step_negligible(
+            && stopping::correction_at_floor(
                 step.norm() * length,
                 ode.rotation_rad(x),
                 tip_move,

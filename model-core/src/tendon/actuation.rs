@@ -32,6 +32,7 @@ use crate::report::Termination;
 use crate::shooting::ShootingSettings;
 use crate::solve::stopping::default_tolerance;
 use crate::solve::{Chord, Confirm};
+use crate::sweep::MAX_TANGENTS;
 
 /// Settings of the displacement-controlled solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,6 +43,11 @@ pub struct DisplacementSettings<T> {
     /// offset, a tension over the tension that bends the rod a radian). The iteration goes on to
     /// the rounding floor while it still improves; an answer must at least meet this.
     pub tolerance: T,
+    /// Whether a solve that carries no sensitivity in ([`Model::solve_displacements`]) traces its
+    /// answer's when its residual reaches the rounding floor, for the warm update after it (two
+    /// sweeps; frictionless, at most six tendons; MODEL.md §6.3). The tendon inverse, which forms
+    /// its own with the tip force there, does without.
+    pub answer_sensitivity: bool,
 }
 
 impl<T: Scalar> Default for DisplacementSettings<T> {
@@ -49,6 +55,7 @@ impl<T: Scalar> Default for DisplacementSettings<T> {
         Self {
             max_iterations: 40,
             tolerance: default_tolerance::<T>() * T::lit(10.0),
+            answer_sensitivity: true,
         }
     }
 }
@@ -449,6 +456,19 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let reach = shooting.tolerance * T::lit(CHORD_REACH);
         // Where the guides' jumps converged in this solve's sweeps: its plain sweeps start there.
         let memory = JumpMemory::new();
+        // A solve that carried no sensitivity in (not a control loop's warm update) hands on its
+        // answer's, traced there when its residual reaches the floor (two sweeps: frictionless,
+        // at most six tendons), not the one its path left: formed at some earlier iterate and
+        // Broyden-updated along the steps since, that is right along those steps only. In f32 on
+        // the tendon bench it was 1-15 % off its answer's, and the first step of the warm update
+        // after it up to 0.3 N too far along the tendons' common tension, which the lengths see
+        // least (MODEL.md §6.3). A warm update keeps its secants: a tick moves little, and two
+        // sweeps would double the bench robot's. (A solve that ends otherwise, at its iteration
+        // limit within tolerance or stalled at the floor, hands on what it holds.)
+        let hand_on = settings.answer_sensitivity
+            && carried.is_none()
+            && tendons.frictionless()
+            && count <= MAX_TANGENTS;
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
                 termination = current.equilibrium.report.termination;
@@ -458,9 +478,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             let size = r.amax();
             if size <= floor {
                 termination = Termination::Converged;
-                break;
+                if fresh || !hand_on {
+                    break;
+                }
+                // The answer's own sensitivity, formed below, then the end.
+                sens = None;
+            } else {
+                iterations += 1;
             }
-            iterations += 1;
             let s = match sens {
                 Some(s) => s,
                 None => match sensitivity(self, tendons, &current, load, false, shooting)? {
@@ -472,11 +497,17 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         d.d_length_d_tension
                     }
                     Err(t) => {
-                        termination = t;
+                        // (A converged answer stays one, without a sensitivity to hand on.)
+                        if !termination.is_success() {
+                            termination = t;
+                        }
                         break;
                     }
                 },
             };
+            if termination.is_success() {
+                break;
+            }
             // A warm update's first step (the tick's) solves the complementarity linearised with
             // the carried sensitivity exactly (Josephy-Newton, as the joint step does): where the
             // tick's start is beyond a tracking step the joint step declines, and the semi-smooth

@@ -389,7 +389,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         near: Option<&TendonEquilibrium<T>>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
         let load = TipLoad::force(*force_n);
-        let control = DisplacementSettings::default();
+        // (Its own sensitivity, with the tip force, is formed where a fit needs it.)
+        let control = DisplacementSettings {
+            answer_sensitivity: false,
+            ..DisplacementSettings::default()
+        };
         let out = match previous {
             Some(p) => self.model.update_displacements(
                 self.tendons,
@@ -813,7 +817,10 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         &TipLoad::zero(),
                         None,
                         shooting,
-                        &DisplacementSettings::default(),
+                        &DisplacementSettings {
+                            answer_sensitivity: false,
+                            ..DisplacementSettings::default()
+                        },
                     )?;
                     problem.sweeps += d.sweeps;
                     if d.is_success() {
