@@ -424,6 +424,28 @@ fn tendon_bad_input_is_refused() {
     ));
 }
 
+/// A forward solve at `tensions_n` and `tip_force_n`, then a cold displacement-controlled solve of
+/// the displacements that hold it: the model, its tendons, the forward solve and the other.
+fn from_displacements<T: Scalar>(
+    rod: Rod<T>,
+    tendons: &[Tendon<T>],
+    tensions_n: &[f64],
+    tip_force_n: [f64; 3],
+) -> (
+    Model<T>,
+    Tendons<T>,
+    TendonEquilibrium<T>,
+    DisplacementSolve<T>,
+) {
+    let (model, set, truth) = solve(rod, tendons, tensions_n, tip_force_n);
+    let d = set.displacements_holding_m(&truth);
+    let load = TipLoad::force(Vector3::from(tip_force_n.map(T::lit)));
+    let back = model
+        .solve_displacements(&set, &d, &load, None, &settings(), &Default::default())
+        .unwrap();
+    (model, set, truth, back)
+}
+
 /// Forward from tensions and a tip force, then the tensions back from the displacements: with
 /// inextensible tendons and with compliant ones behind a feed length, in f64 and f32.
 fn tendon_displacement_round_trip<T: Scalar>(tension_tol_n: f64, tip_tol_m: f64) {
@@ -439,12 +461,7 @@ fn tendon_displacement_round_trip<T: Scalar>(tension_tol_n: f64, tip_tol_m: f64)
             t.axial_stiffness_n = stiffness.map(T::lit);
             t.feed_length_m = T::lit(if stiffness.is_some() { 0.6 } else { 0.0 });
         }
-        let (model, set, truth) = solve(rod, &tendons, &tau, force);
-        let d = set.displacements_holding_m(&truth);
-        let load = TipLoad::force(Vector3::from(force.map(T::lit)));
-        let back = model
-            .solve_displacements(&set, &d, &load, None, &settings(), &Default::default())
-            .unwrap();
+        let (_, _, truth, back) = from_displacements(rod, &tendons, &tau, force);
         assert!(back.is_success(), "{tau:?}: {:?}", back.termination);
         for (j, (found, true_tau)) in back.solved.tensions_n.iter().zip(tau).enumerate() {
             let off = (found.to_f64() - true_tau).abs();
@@ -492,12 +509,7 @@ fn an_f32_displacement_solve_hands_on_the_sensitivity_of_its_answer() {
     for (tau, force) in cases {
         let previous = tau.map(|t| 0.95 * t);
         let (rod, tendons) = reference::tendon_bench::<f32>(20).unwrap();
-        let (model, set, truth) = solve(rod, &tendons, &previous, force);
-        let d = set.displacements_holding_m(&truth);
-        let load = TipLoad::force(Vector3::from(force.map(f32::lit)));
-        let out = model
-            .solve_displacements(&set, &d, &load, None, &settings(), &Default::default())
-            .unwrap();
+        let (_, _, _, out) = from_displacements(rod, &tendons, &previous, force);
         assert!(out.is_success() && out.has_sensitivity, "{tau:?}");
         let at: Vec<f64> = out.solved.tensions_n.iter().map(|t| t.to_f64()).collect();
         let load64 = TipLoad::force(Vector3::from(force));

@@ -20,7 +20,7 @@ use nalgebra::{SMatrix, SVector, Vector3};
 
 use super::complementarity::Complementarity;
 use super::joint_step::Sensitivities;
-use super::sensitivity::{sensitivity, tension_scale_n};
+use super::sensitivity::{sensitivity, tension_scale_n, traceable};
 use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
 use crate::Scalar;
 use crate::error::{ModelError, finite};
@@ -32,7 +32,6 @@ use crate::report::Termination;
 use crate::shooting::ShootingSettings;
 use crate::solve::stopping::default_tolerance;
 use crate::solve::{Chord, Confirm};
-use crate::sweep::MAX_TANGENTS;
 
 /// Settings of the displacement-controlled solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -465,10 +464,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         // least (MODEL.md §6.3). A warm update keeps its secants: a tick moves little, and two
         // sweeps would double the bench robot's. (A solve that ends otherwise, at its iteration
         // limit within tolerance or stalled at the floor, hands on what it holds.)
-        let hand_on = settings.answer_sensitivity
-            && carried.is_none()
-            && tendons.frictionless()
-            && count <= MAX_TANGENTS;
+        let hand_on = settings.answer_sensitivity && carried.is_none() && traceable(tendons);
         for _ in 0..settings.max_iterations {
             if !current.is_success() {
                 termination = current.equilibrium.report.termination;

@@ -95,7 +95,7 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
     settings: &ShootingSettings<T>,
 ) -> Result<Result<Sensitivity<T>, Termination>, ModelError> {
     let mut out = Sensitivity::zero();
-    if tendons.frictionless() && traced(model, tendons, at, load, with_force, &mut out) {
+    if traceable(tendons) && traced(model, tendons, at, load, with_force, &mut out) {
         return Ok(Ok(out));
     }
     // (The differences below write every column the traced sensitivity may have begun; its
@@ -149,6 +149,14 @@ pub(crate) fn sensitivity<T: Scalar, A: Attitude<T>, const NODES: usize>(
     Ok(Ok(out))
 }
 
+/// Whether the sensitivity of `tendons` can be traced ([`traced`]): without capstan friction (the
+/// chords' tensions read the wrap angles, whose changes the tangents do not carry into the
+/// stretch) and with at most six tendons (a sweep's tangent slots; seven to twelve take the
+/// differences).
+pub(crate) fn traceable<T: Scalar>(tendons: &Tendons<T>) -> bool {
+    tendons.frictionless() && tendons.len() <= MAX_TANGENTS
+}
+
 /// The sensitivity of `at` from tangents (see the module's doc), frictionless, at most six tendons
 /// (a sweep's slots), into `out`; `false` where a sweep is not finite or does not pass every
 /// guide, or the result is not finite (`out` is then partly written). Out
@@ -164,7 +172,7 @@ fn traced<T: Scalar, A: Attitude<T>, const NODES: usize>(
     out: &mut Sensitivity<T>,
 ) -> bool {
     let count = tendons.len();
-    // More tensions than a sweep's slots (seven to twelve tendons): the differences.
+    // More tensions than a sweep's slots: not [`traceable`], whoever calls.
     if count > MAX_TANGENTS {
         return false;
     }
