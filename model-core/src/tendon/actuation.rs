@@ -149,8 +149,11 @@ fn secant<T: Scalar, const R: usize>(
 /// offset (the compression that buckles the rod between its guides grows with it). Beyond it the
 /// solve starts from the equilibrium itself: a long linear prediction can land Newton on another
 /// branch (measured: all three of the bench's tendons taken in 5 cm from rest, where the start
-/// converges nowhere, reached a rod buckled between its guides).
-const PREDICTED_BASE_MOVE: f64 = 0.05;
+/// converges nowhere, reached a rod buckled between its guides). A quarter: the two-section
+/// robot's ticks predict moves of 0.17-0.24 (a tenth of a newton on six tendons); at the 0.05 this
+/// was, each of them started from the last equilibrium (four sweeps, no joint step). Its warm
+/// updates up to eight ticks away give the cold solve's answer (`tests/tendon.rs`).
+const PREDICTED_BASE_MOVE: f64 = 0.25;
 
 /// How far above the forward solve's tolerance a start's expected residual may be for its first
 /// sweep to go without tangents, when chord steps can follow it (`crate::solve::Chord`): one chord
@@ -159,10 +162,18 @@ const CHORD_REACH: f64 = 16.0;
 
 /// How far above the rounding floor a step must start for the base sensitivity's secant along it:
 /// from closer, the base's change is mostly the forward solves' rounding, and a secant along it
-/// spoils the predictions the next steps and the next tick start from. (The needed lengths'
-/// sensitivity keeps every secant: skipping them too took the tendon inverse's moving-load test
-/// to its iteration limit; it feeds that inverse's gradient, the base's only starts.)
+/// spoils the predictions the next steps and the next tick start from.
 const SECANT_FLOOR: f64 = 64.0;
+
+/// How far above the rounding floor a step must start for the needed lengths' secant along it:
+/// a step from within a few times the floor changes the lengths by little more than their
+/// rounding, and its secant turns the carried `dN/dtau` along the step by that noise over the
+/// step. On the two-section robot in f32 (floor 3.3e-5) most ticks end on such a step (4e-5 to
+/// 7e-6); with its secant, the next tick's Josephy step and its predicted move of the base came
+/// out up to twice the true ones (0.43 where 0.21), beyond a tracking step, and those ticks took
+/// 9-21 sweeps. Lower than [`SECANT_FLOOR`]: at 64 the tendon inverse's moving-load test, whose
+/// gradient the lengths' secants feed, reached its iteration limit.
+const LENGTHS_SECANT_FLOOR: f64 = 4.0;
 
 /// How far above the rounding floor a step must end for its slow gain to form the sensitivity
 /// afresh: closer, no sensitivity can show a gain of four.
@@ -622,7 +633,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     });
                     if slow {
                         sens = None;
-                    } else if let Some(s) = sens.as_mut() {
+                    } else if let Some(s) = sens.as_mut()
+                        && size > floor * T::lit(LENGTHS_SECANT_FLOOR)
+                    {
                         secant(s, &dn, &dt);
                     }
                     // (Not along a step from within SECANT_FLOOR of the floor.)
