@@ -3,7 +3,10 @@
 //! `(J^T J + mu diag(J^T J)) dx = -J^T e` when it does not, with a trust region on the base rotation
 //! `|dx| L`. The Jacobian comes from the sweep's tangents of the unknowns; a start expected to be
 //! the answer is first confirmed by a plain sweep, then, with a Jacobian taken near it by the
-//! caller, by chord steps on plain sweeps ([`Chord`]).
+//! caller, by chord steps on plain sweeps ([`Chord`]). Where the answer needs no tangents
+//! (equations without a stability test), a full Newton step from within [`PLAIN_REACH`] of the
+//! tolerance is swept without them too, and chord steps with the Jacobian it came from follow
+//! where that sweep is better but not the answer.
 
 use nalgebra::linalg::LU;
 use nalgebra::{Const, DimMin, SMatrix, SVector};
@@ -59,6 +62,13 @@ pub(crate) struct NewtonOptions<T> {
 
 /// Rejected steps tolerated in a row before the solve is declared stalled.
 const MAX_REJECTIONS: u8 = 8;
+
+/// How far above the tolerance a residual may be for the full Newton step from it to be swept
+/// first without tangents, where the answer needs none (equations without a stability test): from
+/// there a step usually lands on the answer, and otherwise the chord steps with the Jacobian it
+/// came from usually finish (a tendon-driven rod's forward solve from a joint step's start, 100-600
+/// times the tolerance off, converged in one step).
+const PLAIN_REACH: f64 = 1000.0;
 
 /// Chord steps at most after a plain first sweep that did not confirm (each one plain sweep and
 /// one of the solve's iterations).
@@ -301,7 +311,30 @@ where
         }
         work.iterations = work.iterations.saturating_add(1);
         let trial_x = *x + step;
-        let trial = run(&trial_x, work);
+        // Equations without a stability test read no tangents at their answer: a full Newton step
+        // from near it is swept without them first, and again with them where that sweep is better
+        // but not the answer (the next step needs its Jacobian). A worse one is rejected as it is.
+        let plain = !ode.has_stability_test()
+            && mu == T::zero()
+            && residual <= tolerance * T::lit(PLAIN_REACH);
+        work.sweep();
+        let mut trial = sweep(
+            ode,
+            &trial_x,
+            if plain {
+                TangentSet::NONE
+            } else {
+                options.tangents
+            },
+            None,
+        );
+        if plain
+            && trial.finite
+            && ode.residual_size(&trial.residual) < residual
+            && !converged(&trial, &trial_x)
+        {
+            trial = run(&trial_x, work);
+        }
         let trial_residual = if trial.finite {
             ode.residual_size(&trial.residual)
         } else {
@@ -351,6 +384,63 @@ mod tests {
     use crate::shooting::ShootingSettings;
     use crate::tendon::{MAX_TENDONS, Tendons};
 
+    /// The tendon scene solved at tensions of 2 and 1.2 N under a tip force.
+    struct Scene {
+        model: crate::model::Model<f64>,
+        set: Tendons<f64>,
+        tensions_n: [f64; MAX_TENDONS],
+        load: TipLoad<f64>,
+        solved: crate::tendon::TendonEquilibrium<f64>,
+    }
+
+    impl Scene {
+        fn solved() -> Self {
+            let (model, tendons) = crate::ode::tendon::tests::scene();
+            let set = Tendons::new(&model, &tendons).unwrap();
+            let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
+            let tau = [2.0, 1.2];
+            let solved = model
+                .solve_tendons(&set, &tau, &load, None, &ShootingSettings::default())
+                .unwrap();
+            assert!(solved.is_success());
+            let mut tensions_n = [0.0; MAX_TENDONS];
+            tensions_n[..2].copy_from_slice(&tau);
+            Self {
+                model,
+                set,
+                tensions_n,
+                load,
+                solved,
+            }
+        }
+
+        /// The scene's rod equations and the unknowns of its answer.
+        fn rod(
+            &self,
+        ) -> (
+            TendonRod<'_, f64, crate::kinematics::Quaternion<f64>, { crate::plan::MAX_NODES }>,
+            SVector<f64, 6>,
+        ) {
+            let ode = TendonRod::new(&self.model, &self.set, &self.tensions_n, &self.load, 1.0);
+            let eq = &self.solved.equilibrium;
+            let answer = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+            (ode, answer)
+        }
+    }
+
+    /// A forward solve's options to rounding, 20 iterations, the unknowns' tangents.
+    fn to_rounding(plain_first: bool) -> NewtonOptions<f64> {
+        let settings = ShootingSettings::<f64>::default();
+        NewtonOptions {
+            tolerance: settings.tolerance,
+            to_rounding: true,
+            max_step_rad: settings.max_rotation_step_rad,
+            max_iterations: 20,
+            tangents: TangentSet::unknowns(false),
+            plain_first,
+        }
+    }
+
     /// Each exit of the chord steps, on the tendon scene from 0.1 % or 1 % off its answer with a
     /// Jacobian `J` taken at the answer: with `J` they converge (each step one plain sweep and one
     /// iteration); a step beyond the trust region (`J / 1e9`) is refused before its sweep and
@@ -360,29 +450,11 @@ mod tests {
     /// least one iteration.
     #[test]
     fn chord_steps_take_only_steps_that_contract() {
-        let (model, tendons) = crate::ode::tendon::tests::scene();
-        let set = Tendons::new(&model, &tendons).unwrap();
-        let load = TipLoad::force(Vector3::new(0.05, -0.1, 0.02));
-        let settings = ShootingSettings::default();
-        let tau = [2.0, 1.2];
-        let solved = model
-            .solve_tendons(&set, &tau, &load, None, &settings)
-            .unwrap();
-        assert!(solved.is_success());
-        let mut all = [0.0; MAX_TENDONS];
-        all[..2].copy_from_slice(&tau);
-        let ode = TendonRod::new(&model, &set, &all, &load, 1.0);
-        let eq = &solved.equilibrium;
-        let answer = ode.unknowns(&eq.base_force_n, &eq.base_moment_nm);
+        let scene = Scene::solved();
+        let (ode, answer) = scene.rod();
+        let eq = &scene.solved.equilibrium;
         let j = sweep(&ode, &answer, TangentSet::unknowns(false), None).jacobian();
-        let options = NewtonOptions {
-            tolerance: settings.tolerance,
-            to_rounding: true,
-            max_step_rad: settings.max_rotation_step_rad,
-            max_iterations: 20,
-            tangents: TangentSet::unknowns(false),
-            plain_first: true,
-        };
+        let options = to_rounding(true);
         // (jacobian, start off by, iterations allowed, converged, chord sweeps, moved)
         let cases = [
             (j, 1e-3, 20, true, None, true),
@@ -437,5 +509,51 @@ mod tests {
                 assert!(apart < 1e-12, "case {k}: {apart:e} from the answer");
             }
         }
+    }
+
+    /// A full Newton step from within `PLAIN_REACH` of the tolerance is swept without tangents
+    /// where the answer reads none (the tendon rod: no stability test), and the solve ends on that
+    /// sweep at the answer; the dead-load rod, whose verdict reads them, keeps them on its last
+    /// sweep.
+    #[test]
+    fn a_step_near_the_answer_is_swept_without_tangents_where_none_are_read() {
+        let scene = Scene::solved();
+        let (ode, answer) = scene.rod();
+        let eq = &scene.solved.equilibrium;
+        let options = to_rounding(false);
+        let mut x = ode.unknowns(&(eq.base_force_n * (1.0 + 1e-10)), &eq.base_moment_nm);
+        let mut sw = sweep(&ode, &x, options.tangents, None);
+        let off = ode.residual_size(&sw.residual);
+        assert!(
+            off > options.tolerance && off <= options.tolerance * PLAIN_REACH,
+            "the start is off by {off:e}, within reach"
+        );
+        let mut work = Work::default();
+        let (_, termination) = newton_in_place(&ode, &mut x, &mut sw, &options, &mut work);
+        assert_eq!(termination, Termination::Converged);
+        assert!(!sw.has_jacobian(), "the answer's sweep carried tangents");
+        assert_eq!(work.sweeps, 1, "{work:?}");
+        let apart = (x - answer).norm() / answer.norm();
+        assert!(apart < 1e-12, "{apart:e} from the answer");
+
+        let dead = crate::ode::dead_load::DeadLoadRod::new(&scene.model, &scene.load, 1.0);
+        let cold = scene
+            .model
+            .solve(
+                &scene.load,
+                crate::Start::Cold,
+                &ShootingSettings::default(),
+            )
+            .unwrap();
+        assert!(cold.report.termination.is_success());
+        let mut u = cold.base_strain_per_m * (1.0 + 1e-9);
+        let mut sw = sweep(&dead, &u, options.tangents, None);
+        let mut work = Work::default();
+        let (_, termination) = newton_in_place(&dead, &mut u, &mut sw, &options, &mut work);
+        assert_eq!(termination, Termination::Converged);
+        assert!(
+            sw.has_jacobian(),
+            "the dead-load answer's sweep lost its tangents"
+        );
     }
 }
