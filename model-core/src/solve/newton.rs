@@ -4,9 +4,9 @@
 //! `|dx| L`. The Jacobian comes from the sweep's tangents of the unknowns; a start expected to be
 //! the answer is first confirmed by a plain sweep, then, with a Jacobian taken near it by the
 //! caller, by chord steps on plain sweeps ([`Chord`]). Where the answer needs no tangents
-//! (equations without a stability test), a full Newton step from within [`PLAIN_REACH`] of the
-//! tolerance is swept without them too, and chord steps with the Jacobian it came from follow
-//! where that sweep is better but not the answer.
+//! (equations without a stability test), an undamped Newton step from within [`PLAIN_REACH`] of
+//! the tolerance is swept without them too, and the same point again with them where that sweep
+//! is better but not the answer.
 
 use nalgebra::linalg::LU;
 use nalgebra::{Const, DimMin, SMatrix, SVector};
@@ -63,11 +63,11 @@ pub(crate) struct NewtonOptions<T> {
 /// Rejected steps tolerated in a row before the solve is declared stalled.
 const MAX_REJECTIONS: u8 = 8;
 
-/// How far above the tolerance a residual may be for the full Newton step from it to be swept
+/// How far above the tolerance a residual may be for the undamped Newton step from it to be swept
 /// first without tangents, where the answer needs none (equations without a stability test): from
-/// there a step usually lands on the answer, and otherwise the chord steps with the Jacobian it
-/// came from usually finish (a tendon-driven rod's forward solve from a joint step's start, 100-600
-/// times the tolerance off, converged in one step).
+/// there a step usually lands on the answer (a tendon-driven rod's forward solve from a joint
+/// step's start, 100-600 times the tolerance off, converged in one step); where it does not, the
+/// same point is swept again with the tangents.
 const PLAIN_REACH: f64 = 1000.0;
 
 /// Chord steps at most after a plain first sweep that did not confirm (each one plain sweep and
@@ -235,7 +235,10 @@ pub(crate) fn converged<T: Scalar, O: RodOde<T, K>, const K: usize>(
 
 /// [`newton`] in place: from `x`, whose sweep `sw` is, to where the solve stops, `sw` following.
 /// Returns the residual's size there and why it stopped. Out of line: the caller's sweep is not
-/// copied into its frame.
+/// copied into its frame. For equations without a stability test `sw` may end without tangents
+/// (a plain sweep that met the tolerance, [`PLAIN_REACH`]): a caller that reads tangents from it
+/// afterwards must solve equations with a test (the reduced inverse's projection reads the tip
+/// force's, on the dead-load rod).
 #[inline(never)]
 pub(crate) fn newton_in_place<T: Scalar, O: RodOde<T, K>, const K: usize>(
     ode: &O,
@@ -548,6 +551,11 @@ mod tests {
         assert!(cold.report.termination.is_success());
         let mut u = cold.base_strain_per_m * (1.0 + 1e-9);
         let mut sw = sweep(&dead, &u, options.tangents, None);
+        let off = dead.residual_size(&sw.residual);
+        assert!(
+            off > options.tolerance && off <= options.tolerance * PLAIN_REACH,
+            "the dead-load start is off by {off:e}, within reach"
+        );
         let mut work = Work::default();
         let (_, termination) = newton_in_place(&dead, &mut u, &mut sw, &options, &mut work);
         assert_eq!(termination, Termination::Converged);
