@@ -524,16 +524,8 @@ mod tests {
         let (ode, answer) = scene.rod();
         let eq = &scene.solved.equilibrium;
         let options = to_rounding(false);
-        let mut x = ode.unknowns(&(eq.base_force_n * (1.0 + 1e-10)), &eq.base_moment_nm);
-        let mut sw = sweep(&ode, &x, options.tangents, None);
-        let off = ode.residual_size(&sw.residual);
-        assert!(
-            off > options.tolerance && off <= options.tolerance * PLAIN_REACH,
-            "the start is off by {off:e}, within reach"
-        );
-        let mut work = Work::default();
-        let (_, termination) = newton_in_place(&ode, &mut x, &mut sw, &options, &mut work);
-        assert_eq!(termination, Termination::Converged);
+        let x = ode.unknowns(&(eq.base_force_n * (1.0 + 1e-10)), &eq.base_moment_nm);
+        let (x, sw, work) = converged_from_near(&ode, x, &options);
         assert!(!sw.has_jacobian(), "the answer's sweep carried tangents");
         assert_eq!(work.sweeps, 1, "{work:?}");
         let apart = (x - answer).norm() / answer.norm();
@@ -549,19 +541,34 @@ mod tests {
             )
             .unwrap();
         assert!(cold.report.termination.is_success());
-        let mut u = cold.base_strain_per_m * (1.0 + 1e-9);
-        let mut sw = sweep(&dead, &u, options.tangents, None);
-        let off = dead.residual_size(&sw.residual);
-        assert!(
-            off > options.tolerance && off <= options.tolerance * PLAIN_REACH,
-            "the dead-load start is off by {off:e}, within reach"
-        );
-        let mut work = Work::default();
-        let (_, termination) = newton_in_place(&dead, &mut u, &mut sw, &options, &mut work);
-        assert_eq!(termination, Termination::Converged);
+        let u = cold.base_strain_per_m * (1.0 + 1e-9);
+        let (_, sw, _) = converged_from_near(&dead, u, &options);
         assert!(
             sw.has_jacobian(),
             "the dead-load answer's sweep lost its tangents"
         );
+    }
+
+    /// Newton in place from `x`, which must be off by more than the tolerance and within
+    /// `PLAIN_REACH` of it, to a converged answer: its unknowns, its sweep and the work after the
+    /// start's sweep (which carries `options`' tangents).
+    fn converged_from_near<O: RodOde<f64, K>, const K: usize>(
+        ode: &O,
+        mut x: SVector<f64, K>,
+        options: &NewtonOptions<f64>,
+    ) -> (SVector<f64, K>, Sweep<f64, K>, Work)
+    where
+        Const<K>: DimMin<Const<K>, Output = Const<K>>,
+    {
+        let mut sw = sweep(ode, &x, options.tangents, None);
+        let off = ode.residual_size(&sw.residual);
+        assert!(
+            off > options.tolerance && off <= options.tolerance * PLAIN_REACH,
+            "the start is off by {off:e}, within reach"
+        );
+        let mut work = Work::default();
+        let (_, termination) = newton_in_place(ode, &mut x, &mut sw, options, &mut work);
+        assert_eq!(termination, Termination::Converged);
+        (x, sw, work)
     }
 }

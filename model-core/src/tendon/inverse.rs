@@ -51,6 +51,15 @@ const MAX_UNKNOWNS: usize = MAX_TENDONS + 3;
 /// Most whitened rows: displacements, tensions, the force prior.
 const MAX_ROWS: usize = 2 * MAX_TENDONS + 3;
 
+/// The displacement settings of the inverse's fits: without the answer's sensitivity, which each
+/// fit forms itself, with the tip force, where it needs it.
+fn fit_settings<T: Scalar>() -> DisplacementSettings<T> {
+    DisplacementSettings {
+        answer_sensitivity: false,
+        ..DisplacementSettings::default()
+    }
+}
+
 type Theta<T> = SVector<T, MAX_UNKNOWNS>;
 type Rows<T> = SVector<T, MAX_ROWS>;
 type Jacobian<T> = SMatrix<T, MAX_ROWS, MAX_UNKNOWNS>;
@@ -389,11 +398,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         near: Option<&TendonEquilibrium<T>>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
         let load = TipLoad::force(*force_n);
-        // (Its own sensitivity, with the tip force, is formed where a fit needs it.)
-        let control = DisplacementSettings {
-            answer_sensitivity: false,
-            ..DisplacementSettings::default()
-        };
+        let control = fit_settings();
         let out = match previous {
             Some(p) => self.model.update_displacements(
                 self.tendons,
@@ -817,10 +822,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                         &TipLoad::zero(),
                         None,
                         shooting,
-                        &DisplacementSettings {
-                            answer_sensitivity: false,
-                            ..DisplacementSettings::default()
-                        },
+                        &fit_settings(),
                     )?;
                     problem.sweeps += d.sweeps;
                     if d.is_success() {
