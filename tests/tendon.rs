@@ -5,8 +5,8 @@
 use integration_tests::tendon_arc;
 use model_checks::reference::{self, csv_rows};
 use model_core::{
-    DisplacementSolve, Model, Rod, Scalar, ShapePoint, ShootingSettings, Stability, Tendon,
-    TendonEquilibrium, TendonState, Tendons, TipLoad,
+    DisplacementSettings, DisplacementSolve, Model, Rod, Scalar, ShapePoint, ShootingSettings,
+    Stability, Tendon, TendonEquilibrium, TendonState, Tendons, Termination, TipLoad,
 };
 use nalgebra::Vector3;
 
@@ -486,6 +486,38 @@ fn tendon_tensions_come_back_from_displacements_in_f64() {
 #[test]
 fn tendon_tensions_come_back_from_displacements_in_f32() {
     tendon_displacement_round_trip::<f32>(2e-2, 1e-5);
+}
+
+/// An answer meets the displacement tolerance. Where that lies below what the forward solves'
+/// rounding resolves (the floor: a few `eps L` of path over the largest offset, 7e-14 here in
+/// f64), the solve ends `Stalled` at the floor, where it once ended `Converged` there whatever its
+/// tolerance (as it still would in f32 with offsets below about L / 250 at the default tolerance);
+/// a tolerance that is not positive is refused.
+#[test]
+fn a_displacement_solve_does_not_converge_below_its_rounding_floor() {
+    let (rod, tendons) = reference::tendon_bench::<f64>(20).unwrap();
+    let (model, set, truth) = solve(rod, &tendons, &[3.0, 1.5, 0.0], [0.0; 3]);
+    let d = set.displacements_holding_m(&truth);
+    let load = truth.equilibrium.load;
+    let with = |tolerance: f64| {
+        let control = DisplacementSettings {
+            tolerance,
+            ..Default::default()
+        };
+        model.solve_displacements(&set, &d, &load, None, &settings(), &control)
+    };
+    let met = with(DisplacementSettings::<f64>::default().tolerance).unwrap();
+    assert!(met.is_success(), "{:?}", met.termination);
+    let below = with(1e-20).unwrap();
+    assert_eq!(below.termination, Termination::Stalled);
+    assert!(!below.is_success());
+    // Where it stopped is the answer to rounding: it just cannot vouch for 1e-20.
+    for (a, b) in below.solved.tensions_n.iter().zip(&met.solved.tensions_n) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b} N");
+    }
+    for bad in [0.0, -1e-9, f64::NAN] {
+        assert!(with(bad).is_err(), "tolerance {bad}");
+    }
 }
 
 /// The sensitivity a displacement solve hands to the next tick (`d_length_d_tension`) is its

@@ -147,6 +147,11 @@ impl<T: Scalar, A: Attitude<T>, const P: usize, const NODES: usize> Problem<'_, 
             }
             None => covariance,
         };
+        // A covariance that is not finite is no posterior: its deviations' `max(0)` would read NaN
+        // as zero spread.
+        if !crate::scalar::all_finite(&covariance) {
+            return quality;
+        }
         quality.param_std = covariance.diagonal().map(|x| x.max(T::zero()).sqrt());
         quality.force_std_n = deviations(&self.basis.force_n, &covariance, T::zero());
         // The tip moves with p directly and through the re-solved shape: dtip/dp = T_p - T_u J_eu^-1 J_ep.

@@ -18,12 +18,12 @@
 use heapless::Vec;
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use super::complementarity::Complementarity;
+use super::complementarity::{Complementarity, residual_size};
 use super::joint_step::Sensitivities;
 use super::sensitivity::{sensitivity, tension_scale_n, traceable};
 use super::{MAX_TENDONS, TendonEquilibrium, Tendons};
 use crate::Scalar;
-use crate::error::{ModelError, finite};
+use crate::error::{ModelError, finite, positive};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
@@ -401,6 +401,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         settings: &DisplacementSettings<T>,
     ) -> Result<DisplacementSolve<T>, ModelError> {
         tendons.check_displacements(displacements_m)?;
+        positive(settings.tolerance, "displacement tolerance")?;
         let count = tendons.len();
         let tau_scale = tension_scale_n(self, tendons);
         let radius = tendons
@@ -484,8 +485,15 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 break;
             }
             let (r, parts, phi) = residual_of(&current, &tau);
-            let size = r.amax();
+            let size = residual_size(&r);
             if size <= floor {
+                // At the rounding floor: an answer only if that meets the tolerance (a path
+                // resolved to a few `eps L` may be more than a tolerance times the offset: f32,
+                // offsets below about L / 250 at the default tolerance).
+                if size > settings.tolerance {
+                    termination = Termination::Stalled;
+                    break;
+                }
                 termination = Termination::Converged;
                 if fresh || !hand_on {
                     break;
@@ -603,7 +611,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                 sweeps += u32::from(moved.equilibrium.report.sweeps);
                 if moved.is_success() {
                     let (r_trial, _, _) = residual_of(&moved, &trial);
-                    let r_new = r_trial.amax();
+                    let r_new = residual_size(&r_trial);
                     if r_new < size {
                         accepted = Some((trial, moved, dt, r_new));
                         break;
@@ -666,7 +674,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         let (r, _, phi) = residual_of(&current, &tau);
         if termination == Termination::IterationLimit
             && current.is_success()
-            && r.amax() <= settings.tolerance
+            && residual_size(&r) <= settings.tolerance
         {
             termination = Termination::Converged;
         }

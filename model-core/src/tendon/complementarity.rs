@@ -43,6 +43,16 @@ fn fischer_burmeister<T: Scalar>(a: T, b: T) -> (T, T, T) {
     }
 }
 
+/// The size of a residual: its largest component, or the largest number where one is not finite
+/// (nalgebra's `amax` passes over NaN, which would read as met).
+pub(super) fn residual_size<T: Scalar>(r: &SVector<T, MAX_TENDONS>) -> T {
+    if crate::scalar::all_finite(r) {
+        r.amax()
+    } else {
+        T::max_value().unwrap_or_else(T::one)
+    }
+}
+
 /// The complementarity of tensions and slack for given spool displacements, Fischer-Burmeister:
 /// each tendon's residual `FB(tau / tau_s, phi / r)` and its derivatives.
 pub(super) struct Complementarity<'a, T> {
@@ -221,6 +231,20 @@ mod tests {
     use proptest::prelude::*;
 
     use super::*;
+
+    /// A residual with a component that is not a number is no answer: its size meets no tolerance
+    /// (nalgebra's `amax` alone gives the largest of the other components).
+    #[test]
+    fn a_residual_that_is_not_a_number_meets_no_tolerance() {
+        let mut r = SVector::<f64, MAX_TENDONS>::zeros();
+        r[1] = -3e-5;
+        assert_eq!(residual_size(&r), 3e-5);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            r[0] = bad;
+            assert!(r.amax() <= 3e-5 || bad.is_infinite());
+            assert!(residual_size(&r) >= f64::MAX, "{bad}");
+        }
+    }
 
     /// Unit scales for `count` tendons.
     fn unit(count: usize) -> Scales<f64> {

@@ -701,6 +701,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         let inv = svd.singular_values.map(|s| T::one() / (s * s));
         let covariance =
             v_t.transpose() * SMatrix::<T, MAX_UNKNOWNS, MAX_UNKNOWNS>::from_diagonal(&inv) * v_t;
+        // (A singular value whose square underflows makes it infinite and the product NaN, which
+        // the deviations' `max(0)` would read as zero spread: no posterior then.)
+        if !crate::scalar::all_finite(&covariance) {
+            return quality;
+        }
         let std = |i: usize| {
             covariance
                 .get((i, i))
@@ -959,7 +964,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             theta
         };
         let answer = best_theta(best, self.count);
-        let best_cost = self.cost_of(&answer, &best.solved)?;
+        // The answer's own misfit, evaluated again: where that fails, no rival can be judged
+        // against it, and the search vouches for nothing.
+        let Some(best_cost) = self.cost_of(&answer, &best.solved)? else {
+            self.settings.max_iterations = full;
+            best.quality.determination = verdict.at_best(Determination::Unverified);
+            return Ok(());
+        };
         for force0 in self.scan_starts(&answer) {
             let Ok(outcome) = self.fit(force0, None)? else {
                 continue;
@@ -1039,17 +1050,15 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         Ok(best.map(|(_, outcome)| self.finish(outcome)))
     }
 
-    /// The sum of squares at `theta` on `solved`.
+    /// The sum of squares at `theta` on `solved` (`None` where its forward solve fails).
     fn cost_of(
         &mut self,
         theta: &Theta<T>,
         solved: &TendonEquilibrium<T>,
-    ) -> Result<T, ModelError> {
+    ) -> Result<Option<T>, ModelError> {
         Ok(self
             .evaluate(theta, Some(solved))?
-            .map_or(T::max_value().unwrap_or_else(T::one), |f| {
-                Problem::<T, A, NODES>::cost(&f)
-            }))
+            .map(|f| Problem::<T, A, NODES>::cost(&f)))
     }
 
     /// How far apart two estimates are, in the answer's posterior standard deviations (the largest
