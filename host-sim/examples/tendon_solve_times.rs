@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use host_sim::scene::{Scene, SceneError};
 use model_core::{
-    DisplacementSettings, Model, ShootingSettings, TendonEquilibrium, Tendons, TipLoad,
+    DisplacementSettings, Model, ShootingSettings, TendonEquilibrium, Tendons, Termination, TipLoad,
 };
 use nalgebra::Vector3;
 
@@ -119,7 +119,13 @@ fn main() -> Result<(), SceneError> {
         .map_err(refused("continuous reference"))?
         .equilibrium
         .tip_position_m;
-    let print = |name: &str, eq: &TendonEquilibrium<f64>, sweeps: u32, us: f64| {
+    // Each line's termination is its own solve's: a displacement solve's, not that of the forward
+    // solve at the tensions it ended on (which converges where the displacement solve stalls).
+    let print = |name: &str,
+                 eq: &TendonEquilibrium<f64>,
+                 termination: Termination,
+                 sweeps: u32,
+                 us: f64| {
         let reference_tip = if name.starts_with("continuous") {
             continuous_reference
         } else {
@@ -128,7 +134,7 @@ fn main() -> Result<(), SceneError> {
         let tip = eq.equilibrium.tip_position_m;
         println!(
             "solve={name} termination={:?} sweeps={sweeps} load_steps={} median_us={us:.1} tip_m=({:.9},{:.9},{:.9}) from_reference_m={:.2e} tensions_n={:?}",
-            eq.equilibrium.report.termination,
+            termination,
             eq.equilibrium.report.load_steps,
             tip.x,
             tip.y,
@@ -147,6 +153,7 @@ fn main() -> Result<(), SceneError> {
     print(
         "tensions_cold",
         &cold,
+        cold.equilibrium.report.termination,
         u32::from(cold.equilibrium.report.sweeps),
         time_us(|| forward(None)),
     );
@@ -155,6 +162,7 @@ fn main() -> Result<(), SceneError> {
     print(
         "tensions_warm",
         &warm,
+        warm.equilibrium.report.termination,
         u32::from(warm.equilibrium.report.sweeps),
         us,
     );
@@ -167,12 +175,13 @@ fn main() -> Result<(), SceneError> {
     print(
         "displacements_cold",
         &d.solved,
+        d.termination,
         d.sweeps,
         time_us(|| displaced(None)),
     );
     let d = displaced(Some(&previous_displacement)).map_err(refused("update"))?;
     let us = time_us(|| displaced(Some(&previous_displacement)));
-    print("displacements_warm", &d.solved, d.sweeps, us);
+    print("displacements_warm", &d.solved, d.termination, d.sweeps, us);
 
     let (model, tendons) = match env("CONTINUOUS_STEPS") {
         Some(steps) => robot(&scene, Some(steps))?,
@@ -187,6 +196,7 @@ fn main() -> Result<(), SceneError> {
     print(
         "continuous_cold",
         &c,
+        c.equilibrium.report.termination,
         u32::from(c.equilibrium.report.sweeps),
         time_us(continuous),
     );

@@ -50,11 +50,43 @@ struct Row {
     observed_cm: Vec<(f64, f64)>,
 }
 
+/// Most Gauss-Newton iterations of a fit.
+const MAX_ITERATIONS: usize = 30;
+
+/// How a fit ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Verdict {
+    /// Converged: the last step was negligible (below 1e-10 in the log-parameters), or the
+    /// Gauss-Newton step at the last iterate predicts a decrease of the sum of squares below 1e-10
+    /// of it (a stationary point: also when no step lowered it, or out of iterations). Otherwise
+    /// the fitted values are where the fit stopped, not a minimum.
+    pub converged: bool,
+    /// Gauss-Newton iterations.
+    pub iterations: usize,
+}
+
+impl Verdict {
+    /// Nothing when converged, else " (not converged after N iterations)": what a report appends to
+    /// a value fitted so.
+    pub fn note(&self) -> String {
+        if self.converged {
+            String::new()
+        } else {
+            let plural = if self.iterations == 1 { "" } else { "s" };
+            format!(
+                " (not converged after {} iteration{plural})",
+                self.iterations
+            )
+        }
+    }
+}
+
 /// A least-squares fit: log-parameters, the Jacobian at the optimum and the residuals there.
 struct Fit {
     theta: Vec<f64>,
     jacobian: DMatrix<f64>,
     residuals: DVector<f64>,
+    verdict: Verdict,
 }
 
 /// The data and the scene it is fitted on.
@@ -213,14 +245,29 @@ impl Problem {
         ))
     }
 
-    /// Gauss-Newton on the log-parameters over `rows`: the parameters, the Jacobian at the optimum and
-    /// the residuals there.
+    /// Gauss-Newton on the log-parameters over `rows`: the parameters, the Jacobian at the optimum,
+    /// the residuals there and the verdict.
     fn fit(&self, fit_density: bool, rows: &[usize]) -> Result<Fit, SceneError> {
+        self.fit_at_most(fit_density, rows, MAX_ITERATIONS)
+    }
+
+    /// [`Problem::fit`] with at most `max_iterations`.
+    fn fit_at_most(
+        &self,
+        fit_density: bool,
+        rows: &[usize],
+        max_iterations: usize,
+    ) -> Result<Fit, SceneError> {
         let n = if fit_density { 2 } else { 1 };
         let mut theta = vec![0.0; n];
         let mut r = self.residuals(&theta, fit_density, rows)?;
         let mut jacobian = DMatrix::zeros(r.len(), n);
-        for _ in 0..30 {
+        let mut verdict = Verdict {
+            converged: false,
+            iterations: 0,
+        };
+        for iteration in 1..=max_iterations {
+            verdict.iterations = iteration;
             for k in 0..n {
                 let mut t = theta.clone();
                 let h = 1e-5;
@@ -238,6 +285,8 @@ impl Problem {
                 .ok_or_else(|| {
                     SceneError::new("calibration", "the data do not determine the parameters")
                 })?;
+            // Stationary: the linearisation predicts a negligible decrease for the full step.
+            verdict.converged = (&jacobian * &step).norm_squared() <= 1e-10 * r.norm_squared();
             // Halve the step until the sum of squares decreases.
             let mut scale = 1.0;
             let mut accepted = false;
@@ -258,6 +307,7 @@ impl Problem {
                 scale *= 0.5;
             }
             if !accepted || step.norm() * scale < 1e-10 {
+                verdict.converged |= accepted;
                 break;
             }
         }
@@ -265,6 +315,7 @@ impl Problem {
             theta,
             jacobian,
             residuals: r,
+            verdict,
         })
     }
 }
@@ -278,6 +329,8 @@ pub struct LooRow {
     pub youngs_modulus_pa: f64,
     /// Error of the prediction for the left-out row (rms over its points), cm.
     pub error_cm: f64,
+    /// How the fit without it ended.
+    pub verdict: Verdict,
 }
 
 /// A calibration.
@@ -289,6 +342,8 @@ pub struct Calibration {
     pub start_youngs_modulus_pa: f64,
     /// Fitted Young's modulus, Pa.
     pub youngs_modulus_pa: f64,
+    /// How the fit ended: a value not converged is where the fit stopped, not a minimum.
+    pub verdict: Verdict,
     /// Its standard deviation, Pa.
     pub youngs_std_pa: f64,
     /// Fitted line-density scale and its standard deviation, when fitted.
@@ -330,6 +385,7 @@ pub fn calibrate(
         theta,
         jacobian,
         residuals: r,
+        verdict,
     } = problem.fit(fit_density, &all)?;
     progress();
     let dof = (r.len() as f64 - theta.len() as f64).max(1.0);
@@ -359,12 +415,14 @@ pub fn calibrate(
     let mut loo = Vec::new();
     for &left_out in &all {
         let rest: Vec<usize> = all.iter().copied().filter(|&i| i != left_out).collect();
-        let theta_k = problem.fit(fit_density, &rest)?.theta;
+        let fold = problem.fit(fit_density, &rest)?;
+        let theta_k = fold.theta;
         let r_k = problem.residuals(&theta_k, fit_density, &[left_out])?;
         loo.push(LooRow {
             mass_g: problem.rows.get(left_out).map_or(f64::NAN, |r| r.mass_g),
             youngs_modulus_pa: e0 * theta_k.first().copied().unwrap_or(0.0).exp(),
             error_cm: points(&r_k),
+            verdict: fold.verdict,
         });
         progress();
     }
@@ -374,6 +432,7 @@ pub fn calibrate(
         dataset,
         start_youngs_modulus_pa: e0,
         youngs_modulus_pa: e0 * e_scale,
+        verdict,
         youngs_std_pa: e0 * e_scale * std_log_e,
         density_scale,
         rms_cm: points(&r),
@@ -386,4 +445,28 @@ pub fn calibrate(
 /// How many fits [`calibrate`] runs (for a progress bar).
 pub fn fit_count(dataset: Dataset) -> Result<u64, SceneError> {
     Ok(Problem::new(dataset)?.rows.len() as u64 + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fit_cut_short_says_it_did_not_converge() {
+        let problem = Problem::new(Dataset::Table43).expect("table 4.3");
+        let all: Vec<usize> = (0..problem.rows.len()).collect();
+        let fit = problem.fit(false, &all).expect("fit");
+        assert!(fit.verdict.converged, "{:?}", fit.verdict);
+        assert_eq!(fit.verdict.note(), "");
+        // One iteration from the scene's E moves it by 1.6 %: no minimum yet.
+        let short = problem.fit_at_most(false, &all, 1).expect("fit");
+        assert_eq!(
+            short.verdict,
+            Verdict {
+                converged: false,
+                iterations: 1
+            }
+        );
+        assert_eq!(short.verdict.note(), " (not converged after 1 iteration)");
+    }
 }

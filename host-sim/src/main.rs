@@ -314,7 +314,19 @@ fn solve_text(s: &run::Solution) -> String {
     if let Some(tendons) = &s.tendons {
         tendon_given_text(&mut t, tendons);
     }
-    let _ = writeln!(t, "solve: {:?}", s.report);
+    // Under displacement control the report is the last forward solve's, at the tensions the
+    // displacement solve ended on (it may converge where the displacement solve stalled): the
+    // status and the displacement solve's line above are the verdict.
+    let displaced = s
+        .tendons
+        .as_ref()
+        .is_some_and(|t| t.displacement_solve.is_some());
+    let label = if displaced {
+        "forward solve at those tensions"
+    } else {
+        "solve"
+    };
+    let _ = writeln!(t, "{label}: {:?}", s.report);
     match (
         &s.tip_position_m,
         &s.tip_tangent,

@@ -4,7 +4,7 @@ use std::fmt::Write;
 
 use crate::thesis::{
     Check, THESIS_MEAN_ERR_4_1_PCT, THESIS_MEAN_ERR_4_3_PCT, THESIS_MEAN_ERR_4_5_CM, Table41,
-    Table43, Table45, TipRow, Validation,
+    Table43, Table45, TipRow, Validation, left_out_note, not_converged,
 };
 
 fn tip_row(out: &mut String, r: &TipRow, length_cm: f64) {
@@ -33,11 +33,6 @@ fn tip_row(out: &mut String, r: &TipRow, length_cm: f64) {
 
 const TIP_HEADER: &str = "mass(g) |   observed    |    thesis     |     ours      | thesis err(cm,%) |  our err(cm,%)  | |ours-thesis|(cm)\n";
 
-fn mean(v: impl Iterator<Item = f64>) -> f64 {
-    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
-    s / n as f64
-}
-
 fn table_4_1(out: &mut String, t: &Table41) {
     let _ = writeln!(
         out,
@@ -54,10 +49,11 @@ fn table_4_1(out: &mut String, t: &Table41) {
         }
         let ours = t.mean_error_pct()[i];
         let thesis = t.thesis_mean_error_pct()[i];
-        let cm = mean(rows.iter().map(TipRow::error_cm));
+        let cm = t.mean_error_cm()[i];
         let _ = writeln!(
             out,
-            "mean error vs observed: ours {cm:.3} cm = {ours:.2} %; thesis {thesis:.2} % (printed: {:.2} %)\n",
+            "mean error vs observed: ours {cm:.3} cm = {ours:.2} %{}; thesis {thesis:.2} % (printed: {:.2} %)\n",
+            left_out_note(not_converged(rows)),
             THESIS_MEAN_ERR_4_1_PCT[i]
         );
     }
@@ -73,11 +69,12 @@ fn table_4_3(out: &mut String, t: &Table43, number: &str) {
     for r in &t.rows {
         tip_row(out, r, t.rod_length_cm);
     }
-    let cm = mean(t.rows.iter().map(TipRow::error_cm));
     let _ = writeln!(
         out,
-        "mean error vs observed: ours {cm:.3} cm = {:.2} %; thesis {:.2} % (printed: {THESIS_MEAN_ERR_4_3_PCT:.2} %)",
+        "mean error vs observed: ours {:.3} cm = {:.2} %{}; thesis {:.2} % (printed: {THESIS_MEAN_ERR_4_3_PCT:.2} %)",
+        t.mean_error_cm(),
         t.mean_error_pct(),
+        left_out_note(not_converged(&t.rows)),
         t.thesis_mean_error_pct()
     );
 }
@@ -94,7 +91,7 @@ fn table_4_5(out: &mut String, t: &Table45) {
     for r in &t.rows {
         let _ = writeln!(
             out,
-            "{:>7.1} | {:>8.3} | {:>10.4} | {:>8.4} | {:>7.4} | {:>10.4} | {:>8.4} | {:>7.4} | {:>+7.4} {:>+7.4}",
+            "{:>7.1} | {:>8.3} | {:>10.4} | {:>8.4} | {:>7.4} | {:>10.4} | {:>8.4} | {:>7.4} | {:>+7.4} {:>+7.4}{}",
             r.mass_g,
             r.observed_cm,
             r.thesis_cm[0],
@@ -105,13 +102,25 @@ fn table_4_5(out: &mut String, t: &Table45) {
             (r.ours_cm[1] - r.observed_cm).abs(),
             r.ours_cm[0] - r.thesis_cm[0],
             r.ours_cm[1] - r.thesis_cm[1],
+            match r.converged {
+                [true, true] => "",
+                [false, true] => " | NOT CONVERGED/STABLE (average)",
+                [true, false] => " | NOT CONVERGED/STABLE (accurate)",
+                [false, false] => " | NOT CONVERGED/STABLE",
+            },
         );
     }
     let ours = t.mean_error_cm();
+    let failed = t.not_converged();
     let _ = writeln!(
         out,
-        "mean |error| vs observed: ours {:.4} cm (average), {:.4} cm (accurate); thesis printed {:.4} / {:.3} cm",
-        ours[0], ours[1], THESIS_MEAN_ERR_4_5_CM[0], THESIS_MEAN_ERR_4_5_CM[1]
+        "mean |error| vs observed: ours {:.4} cm (average){}, {:.4} cm (accurate){}; thesis printed {:.4} / {:.3} cm",
+        ours[0],
+        left_out_note(failed[0]),
+        ours[1],
+        left_out_note(failed[1]),
+        THESIS_MEAN_ERR_4_5_CM[0],
+        THESIS_MEAN_ERR_4_5_CM[1]
     );
     let _ = writeln!(
         out,
@@ -193,7 +202,8 @@ pub fn calibration(c: &crate::calibrate::Calibration) -> String {
     );
     let _ = writeln!(
         out,
-        "Young's modulus: {:.2} GPa +- {:.2} GPa (1 sd; the scene's value {:.2} GPa)",
+        "Young's modulus{}: {:.2} GPa +- {:.2} GPa (1 sd; the scene's value {:.2} GPa)",
+        c.verdict.note(),
         c.youngs_modulus_pa / 1e9,
         c.youngs_std_pa / 1e9,
         c.start_youngs_modulus_pa / 1e9
@@ -214,10 +224,11 @@ pub fn calibration(c: &crate::calibrate::Calibration) -> String {
     for l in &c.loo {
         let _ = writeln!(
             out,
-            "{:>7.1} | {:>17.2} | {:>8.3}",
+            "{:>7.1} | {:>17.2} | {:>8.3}{}",
             l.mass_g,
             l.youngs_modulus_pa / 1e9,
-            l.error_cm
+            l.error_cm,
+            l.verdict.note()
         );
     }
     let _ = writeln!(out, "rms leave-one-out error: {:.3} cm", c.loo_rms_cm);

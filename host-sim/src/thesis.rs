@@ -94,6 +94,8 @@ pub struct Curve {
     pub mass_g: f64,
     /// Backbone points, cm.
     pub points: Vec<PointCm>,
+    /// Did its solve converge to a stable equilibrium? If not, the points are no answer: not drawn.
+    pub converged: bool,
 }
 
 /// Experiment 1a: both section tips per row.
@@ -135,6 +137,34 @@ pub struct DeltaRow {
     pub ours_cm: [f64; 2],
     /// Our predicted cable lengths (average, accurate), cm.
     pub ours_length_cm: [f64; 2],
+    /// Did this row's solve and the 0 g reference's converge to a stable equilibrium (average,
+    /// accurate)? If not, the row's values of that model are NaN: failed, no answer.
+    pub converged: [bool; 2],
+}
+
+impl DeltaRow {
+    /// A row from our cable lengths and the 0 g reference's, cm (None: the solve did not converge
+    /// to a stable equilibrium).
+    fn new(
+        mass_g: f64,
+        observed_cm: f64,
+        thesis_cm: [f64; 2],
+        length_cm: [Option<f64>; 2],
+        reference_cm: [Option<f64>; 2],
+    ) -> Self {
+        let delta = |m: usize| match (length_cm[m], reference_cm[m]) {
+            (Some(l), Some(r)) => Some(l - r),
+            _ => None,
+        };
+        Self {
+            mass_g,
+            observed_cm,
+            thesis_cm,
+            ours_cm: [0, 1].map(|m| delta(m).unwrap_or(f64::NAN)),
+            ours_length_cm: length_cm.map(|l| l.unwrap_or(f64::NAN)),
+            converged: [0, 1].map(|m| delta(m).is_some()),
+        }
+    }
 }
 
 /// Table 4.5.
@@ -149,11 +179,37 @@ fn mean(values: impl Iterator<Item = f64>) -> f64 {
     if n == 0 { f64::NAN } else { sum / n as f64 }
 }
 
+/// Our mean error over the rows that converged to a stable equilibrium, cm (the others are no
+/// answer: see [`not_converged`]).
+fn mean_converged_error_cm(rows: &[TipRow]) -> f64 {
+    mean(rows.iter().filter(|r| r.converged).map(TipRow::error_cm))
+}
+
+/// How many rows did not converge to a stable equilibrium (left out of our means).
+pub fn not_converged(rows: &[TipRow]) -> usize {
+    rows.iter().filter(|r| !r.converged).count()
+}
+
+/// " (n rows not converged, left out)" when n > 0: the note on a mean or worst over the converged
+/// rows.
+pub fn left_out_note(n: usize) -> String {
+    match n {
+        0 => String::new(),
+        1 => " (1 row not converged, left out)".into(),
+        n => format!(" ({n} rows not converged, left out)"),
+    }
+}
+
 impl Table41 {
-    /// Mean error against the observations, % of the section length (sections 1 and 2).
+    /// Mean error against the observations over the converged rows, cm (sections 1 and 2).
+    pub fn mean_error_cm(&self) -> [f64; 2] {
+        [&self.section1, &self.section2].map(|rows| mean_converged_error_cm(rows))
+    }
+    /// Mean error against the observations over the converged rows, % of the section length
+    /// (sections 1 and 2).
     pub fn mean_error_pct(&self) -> [f64; 2] {
-        [&self.section1, &self.section2]
-            .map(|rows| mean(rows.iter().map(TipRow::error_cm)) / self.section_length_cm * 100.0)
+        self.mean_error_cm()
+            .map(|cm| cm / self.section_length_cm * 100.0)
     }
     /// The thesis's mean error recomputed from its table, %.
     pub fn thesis_mean_error_pct(&self) -> [f64; 2] {
@@ -172,9 +228,13 @@ impl Table41 {
 }
 
 impl Table43 {
-    /// Mean error against the observations, % of the rod length.
+    /// Mean error against the observations over the converged rows, cm.
+    pub fn mean_error_cm(&self) -> f64 {
+        mean_converged_error_cm(&self.rows)
+    }
+    /// Mean error against the observations over the converged rows, % of the rod length.
     pub fn mean_error_pct(&self) -> f64 {
-        mean(self.rows.iter().map(TipRow::error_cm)) / self.rod_length_cm * 100.0
+        self.mean_error_cm() / self.rod_length_cm * 100.0
     }
     /// The thesis's mean error recomputed from its table, %.
     pub fn thesis_mean_error_pct(&self) -> f64 {
@@ -190,24 +250,32 @@ impl Table43 {
 }
 
 impl Table45 {
-    /// Mean absolute error of our deltas against the observations, cm (average, accurate).
+    /// Mean absolute error of our deltas against the observations over the converged rows, cm
+    /// (average, accurate).
     pub fn mean_error_cm(&self) -> [f64; 2] {
         [0, 1].map(|m| {
             mean(
                 self.rows
                     .iter()
+                    .filter(|r| r.converged[m])
                     .map(|r| (r.ours_cm[m] - r.observed_cm).abs()),
             )
         })
     }
-    /// Largest distance from the thesis's predicted deltas, cm (average, accurate).
+    /// Largest distance from the thesis's predicted deltas over the converged rows, cm (average,
+    /// accurate).
     pub fn worst_reproduction_cm(&self) -> [f64; 2] {
         [0, 1].map(|m| {
             self.rows
                 .iter()
+                .filter(|r| r.converged[m])
                 .map(|r| (r.ours_cm[m] - r.thesis_cm[m]).abs())
                 .fold(0.0, f64::max)
         })
+    }
+    /// How many rows did not converge to a stable equilibrium (average, accurate).
+    pub fn not_converged(&self) -> [usize; 2] {
+        [0, 1].map(|m| self.rows.iter().filter(|r| !r.converged[m]).count())
     }
 }
 
@@ -246,8 +314,16 @@ impl Validation {
             limit,
             passed: value.is_finite() && value <= limit,
         };
-        let not_converged = |rows: &[TipRow]| rows.iter().filter(|r| !r.converged).count() as f64;
+        let count = |rows: &[TipRow]| not_converged(rows) as f64;
         let t45 = self.table_4_5.worst_reproduction_cm();
+        let t45_failed = self.table_4_5.not_converged();
+        let mean_4_3 = |number: &str, t: &Table43| {
+            format!(
+                "Table {number} ({}): mean tip error vs observed, % of rod{}",
+                t.model,
+                left_out_note(not_converged(&t.rows))
+            )
+        };
         vec![
             check(
                 "Table 4.1: worst distance from the thesis's predicted section tips, cm",
@@ -256,36 +332,52 @@ impl Validation {
             ),
             check(
                 "Table 4.1: rows not converged to a stable equilibrium",
-                not_converged(&self.table_4_1.section1),
+                count(&self.table_4_1.section1),
                 0.0,
             ),
             check(
                 "Table 4.3 (average): rows not converged to a stable equilibrium",
-                not_converged(&self.table_4_3_average.rows),
+                count(&self.table_4_3_average.rows),
                 0.0,
             ),
             check(
                 "Table 4.4 (accurate): rows not converged to a stable equilibrium",
-                not_converged(&self.table_4_4_accurate.rows),
+                count(&self.table_4_4_accurate.rows),
                 0.0,
             ),
             check(
-                "Table 4.3 (average): mean tip error vs observed, % of rod",
+                &mean_4_3("4.3", &self.table_4_3_average),
                 self.table_4_3_average.mean_error_pct(),
                 TOL_4_3_MEAN_PCT,
             ),
             check(
-                "Table 4.4 (accurate): mean tip error vs observed, % of rod",
+                &mean_4_3("4.4", &self.table_4_4_accurate),
                 self.table_4_4_accurate.mean_error_pct(),
                 TOL_4_3_MEAN_PCT,
             ),
             check(
-                "Table 4.5 (average): worst distance from the thesis's deltas, cm",
+                "Table 4.5 (average): rows not converged to a stable equilibrium",
+                t45_failed[0] as f64,
+                0.0,
+            ),
+            check(
+                "Table 4.5 (accurate): rows not converged to a stable equilibrium",
+                t45_failed[1] as f64,
+                0.0,
+            ),
+            check(
+                &format!(
+                    "Table 4.5 (average): worst distance from the thesis's deltas, cm{}",
+                    left_out_note(t45_failed[0])
+                ),
                 t45[0],
                 TOL_4_5_CM,
             ),
             check(
-                "Table 4.5 (accurate): worst distance from the thesis's deltas, cm",
+                &format!(
+                    "Table 4.5 (accurate): worst distance from the thesis's deltas, cm{}",
+                    left_out_note(t45_failed[1])
+                ),
                 t45[1],
                 TOL_4_5_CM,
             ),
@@ -299,6 +391,13 @@ pub(crate) struct Solved {
     pub cables_m: Vec<f64>,
     pub converged: bool,
     pub stability: Stability<f64>,
+}
+
+impl Solved {
+    /// Converged to a stable equilibrium: an answer.
+    pub fn is_answer(&self) -> bool {
+        self.converged && self.stability == Stability::Stable
+    }
 }
 
 pub(crate) fn solve_rows(
@@ -354,7 +453,7 @@ pub fn table_4_1() -> Result<Table41, SceneError> {
         let model = Model::<f64>::new(rod).map_err(|e| SceneError::new("scene", e.to_string()))?;
         let tips = solve_rows(&model, &scene, &TipLoad::zero(), &[transition_m, length_m])?;
         let curve = solve_rows(&model, &scene, &TipLoad::zero(), &curve_s)?;
-        let converged = tips.converged && tips.stability == Stability::Stable;
+        let converged = tips.is_answer();
         for (i, (section, observed, thesis)) in [
             (&mut out.section1, (row[1], row[2]), (row[5], row[6])),
             (&mut out.section2, (row[3], row[4]), (row[7], row[8])),
@@ -391,6 +490,7 @@ pub fn table_4_1() -> Result<Table41, SceneError> {
                 .iter()
                 .map(|p| PointCm::from_m(&p.position_m))
                 .collect(),
+            converged: curve.is_answer(),
         });
     }
     Ok(out)
@@ -435,7 +535,7 @@ pub fn table_4_3(accurate: bool) -> Result<Table43, SceneError> {
                 y: row[4],
             },
             ours: tip,
-            converged: solved.converged && solved.stability == Stability::Stable,
+            converged: solved.is_answer(),
             stability: solved.stability,
         });
         out.curves.push(Curve {
@@ -445,6 +545,7 @@ pub fn table_4_3(accurate: bool) -> Result<Table43, SceneError> {
                 .iter()
                 .map(|p| PointCm::from_m(&p.position_m))
                 .collect(),
+            converged: solved.is_answer(),
         });
     }
     Ok(out)
@@ -458,28 +559,27 @@ pub fn table_4_5() -> Result<Table45, SceneError> {
         .map(|s| Model::<f64>::new(s.rod()?).map_err(|e| SceneError::new("scene", e.to_string())))
         .collect::<Result<Vec<_>, _>>()?;
     let mut rows = Vec::new();
-    let mut reference_cm = [f64::NAN; 2];
+    let mut reference_cm = [None; 2];
     for (i, row) in csv_rows::<7>(reference::TABLE_4_5_CSV).enumerate() {
         let row = row.map_err(table_error)?;
         let mass_g = row[0];
-        let mut length_cm = [f64::NAN; 2];
+        let mut length_cm = [None; 2];
         for (m, (model, scene)) in models.iter().zip(&scenes).enumerate() {
             let solved = solve_rows(model, scene, &weight(scene, mass_g), &[])?;
-            length_cm[m] = solved.cables_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M;
+            length_cm[m] = solved
+                .is_answer()
+                .then(|| solved.cables_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M);
             if i == 0 {
                 reference_cm[m] = length_cm[m];
             }
         }
-        rows.push(DeltaRow {
+        rows.push(DeltaRow::new(
             mass_g,
-            observed_cm: row[2],
-            thesis_cm: [row[4], row[6]],
-            ours_cm: [
-                length_cm[0] - reference_cm[0],
-                length_cm[1] - reference_cm[1],
-            ],
-            ours_length_cm: length_cm,
-        });
+            row[2],
+            [row[4], row[6]],
+            length_cm,
+            reference_cm,
+        ));
     }
     Ok(Table45 { rows })
 }
@@ -540,6 +640,15 @@ pub fn inverse_table(accurate: bool) -> Result<Vec<InverseRow>, SceneError> {
         ..InverseSettings::with_resolution(scene.estimate.resolution_m)
     };
     let unloaded = solve_rows(&model, &scene, &TipLoad::zero(), &[])?;
+    if !unloaded.is_answer() {
+        return Err(SceneError::new(
+            "0 g reference",
+            format!(
+                "did not converge to a stable equilibrium (converged {}, {:?}): no reference length",
+                unloaded.converged, unloaded.stability
+            ),
+        ));
+    }
     let reference_m = unloaded.cables_m.first().copied().unwrap_or(f64::NAN);
     let observed_tips: Vec<[f64; 5]> = csv_rows::<5>(reference::TABLE_4_3_CSV)
         .collect::<Result<_, _>>()
@@ -584,4 +693,137 @@ pub fn inverse_table(accurate: bool) -> Result<Vec<InverseRow>, SceneError> {
         });
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tip_row(ours_x_cm: f64, converged: bool) -> TipRow {
+        TipRow {
+            mass_g: 10.0,
+            observed: PointCm { x: 0.0, y: 0.0 },
+            thesis: PointCm { x: 0.0, y: 0.0 },
+            ours: PointCm {
+                x: ours_x_cm,
+                y: 0.0,
+            },
+            converged,
+            stability: if converged {
+                Stability::Stable
+            } else {
+                Stability::FreeEndUnstable
+            },
+        }
+    }
+
+    fn table_4_3(rows: Vec<TipRow>) -> Table43 {
+        Table43 {
+            model: "average",
+            rows,
+            curves: Vec::new(),
+            rod_length_cm: 80.0,
+        }
+    }
+
+    fn delta_row(ours_cm: [f64; 2], converged: [bool; 2]) -> DeltaRow {
+        DeltaRow {
+            mass_g: 20.0,
+            observed_cm: 0.5,
+            thesis_cm: [0.5, 0.5],
+            ours_cm,
+            ours_length_cm: [38.0, 38.0],
+            converged,
+        }
+    }
+
+    #[test]
+    fn a_failed_solve_gives_no_cable_delta() {
+        let row = DeltaRow::new(20.0, 0.5, [0.5, 0.5], [Some(38.5), None], [Some(38.0); 2]);
+        assert_eq!(row.converged, [true, false]);
+        assert!((row.ours_cm[0] - 0.5).abs() < 1e-12, "{row:?}");
+        assert!(
+            row.ours_cm[1].is_nan() && row.ours_length_cm[1].is_nan(),
+            "{row:?}"
+        );
+        // A failed 0 g reference fails every delta against it.
+        let row = DeltaRow::new(20.0, 0.5, [0.5, 0.5], [Some(38.5); 2], [None, Some(38.0)]);
+        assert_eq!(row.converged, [false, true]);
+        assert!(
+            row.ours_cm[0].is_nan() && row.ours_length_cm[0] == 38.5,
+            "{row:?}"
+        );
+    }
+
+    #[test]
+    fn means_and_checks_leave_out_failed_rows_and_fail_on_them() {
+        // 1 cm off where converged; the failed rows are far off and must not count.
+        let rows = vec![
+            tip_row(1.0, true),
+            tip_row(1.0, true),
+            tip_row(100.0, false),
+        ];
+        let t43 = table_4_3(rows.clone());
+        assert!((t43.mean_error_cm() - 1.0).abs() < 1e-12);
+        assert!((t43.mean_error_pct() - 1.25).abs() < 1e-12);
+        let t41 = Table41 {
+            section1: rows.clone(),
+            section2: rows,
+            curves: Vec::new(),
+            section_length_cm: 20.0,
+        };
+        assert_eq!(t41.mean_error_pct(), [5.0, 5.0]);
+        let v = Validation {
+            table_4_1: t41,
+            table_4_3_average: t43,
+            table_4_4_accurate: table_4_3(vec![tip_row(1.0, true)]),
+            table_4_5: Table45 {
+                rows: vec![
+                    delta_row([0.501, 0.502], [true, true]),
+                    delta_row([0.9, 0.9], [true, false]),
+                ],
+            },
+        };
+        let checks = v.checks();
+        let find = |name: &str| {
+            checks
+                .iter()
+                .find(|c| c.name.starts_with(name))
+                .unwrap_or_else(|| panic!("no check {name:?} in {checks:?}"))
+        };
+        let mean = find("Table 4.3 (average): mean tip error vs observed, % of rod");
+        assert!(mean.passed && (mean.value - 1.25).abs() < 1e-12, "{mean:?}");
+        assert!(
+            mean.name.ends_with("(1 row not converged, left out)"),
+            "{mean:?}"
+        );
+        assert!(!find("Table 4.3 (average): rows not converged").passed);
+        assert!(find("Table 4.4 (accurate): rows not converged").passed);
+        // Table 4.5: the failed accurate row fails the table and is not a distance from the thesis.
+        assert!(find("Table 4.5 (average): rows not converged").passed);
+        let failed = find("Table 4.5 (accurate): rows not converged");
+        assert!(!failed.passed && failed.value == 1.0, "{failed:?}");
+        let worst = find("Table 4.5 (accurate): worst distance from the thesis's deltas, cm");
+        assert!((worst.value - 0.002).abs() < 1e-12, "{worst:?}");
+        assert!(
+            worst.name.ends_with("(1 row not converged, left out)"),
+            "{worst:?}"
+        );
+        let worst = find("Table 4.5 (average): worst distance from the thesis's deltas, cm");
+        assert!((worst.value - 0.4).abs() < 1e-12, "{worst:?}");
+        assert!((v.table_4_5.mean_error_cm()[1] - 0.002).abs() < 1e-12);
+    }
+
+    #[test]
+    fn only_a_converged_stable_solve_is_an_answer() {
+        let solved = |converged, stability| Solved {
+            points: Vec::new(),
+            cables_m: Vec::new(),
+            converged,
+            stability,
+        };
+        assert!(solved(true, Stability::Stable).is_answer());
+        assert!(!solved(false, Stability::Stable).is_answer());
+        assert!(!solved(true, Stability::FreeEndUnstable).is_answer());
+    }
 }

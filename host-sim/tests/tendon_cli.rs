@@ -1352,3 +1352,33 @@ fn tendon_free_scenes_plot_too() {
     assert_eq!(code(&out), 0, "{}", stderr(&out));
     assert!(std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0) > 1000);
 }
+
+/// Spool displacements the grid cannot meet (Rao et al.'s robot at one RK4 step between disks,
+/// given the displacements its tensions (4, 0, 0, 0, 2, 0) N need at 800 steps): the displacement
+/// solve stalls, and `solve` says so (exit 3, no numbers), though the forward solve at the tensions
+/// it ended on converged; the text labels that solve's report as such, not as the solve's.
+#[test]
+fn a_displacement_solve_that_stalls_is_no_answer() {
+    let coarse = scene_text("tendon_rao_two_section.toml").replace("steps = 100", "steps = 10");
+    assert_eq!(coarse.matches("steps = 10\n").count(), 2);
+    let path = write_scene("rao-coarse", &coarse);
+    let d = "--displacements=0.006060727668387944,5.485480448508273e-5,-0.005951018059417751,\
+             0.00410209534165995,0.004025730856211607,-0.007909650386145939";
+    let json = host_sim(&["solve", &path, d, "--format", "json"]);
+    assert_eq!(code(&json), 3, "{}", stderr(&json));
+    let v = json_of(&json);
+    assert_ne!(v["status"]["verdict"], "answer", "{}", v["status"]);
+    assert_eq!(v["tendons"]["displacement_solve"]["termination"], "Stalled");
+    assert_eq!(v["report"]["termination"], "Converged");
+    assert!(v["tip_position_m"].is_null() && v["tendons"]["tensions_n"].is_null());
+    let text = stdout(&host_sim(&["solve", &path, d]));
+    assert!(
+        text.contains("displacement solve: termination Stalled"),
+        "{text}"
+    );
+    assert!(
+        text.contains("forward solve at those tensions: Report"),
+        "{text}"
+    );
+    assert!(!text.contains("\nsolve: "), "{text}");
+}

@@ -64,6 +64,14 @@ fn main() -> Result<(), ModelError> {
     for g in grams {
         let load = hang(g);
         let converged = model.solve(&load, Start::Cold, &tight)?;
+        if !converged.report.termination.is_success() {
+            // Every line's from_converged_m is measured against it: no reference, no distance.
+            eprintln!(
+                "mass_g={g}: the reference solve (cold, default tolerance) did not converge ({:?})",
+                converged.report.termination
+            );
+            std::process::exit(1);
+        }
         let lighter = model.solve(&hang(g * 0.99), Start::Cold, &settings)?;
         let mut solvers = vec![("cold", Solver::Full(Start::Cold))];
         if warm {

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use model_core::{Model, Start, TipLoad};
 use nalgebra::Vector3;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use super::{
@@ -43,6 +44,33 @@ const MARK_PT: f64 = 2.2;
 /// A model curve's line width, points.
 const CURVE_PT: f64 = 0.9;
 
+/// A model curve with its legend entry `label`; where its solve failed (`points` `None`), the
+/// legend entry alone, `label: why`, and no line: a failed solve is no answer.
+fn line_or_failed<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    points: Option<impl Iterator<Item = (f64, f64)>>,
+    style: ShapeStyle,
+    label: String,
+    why: &str,
+) -> Result<(), SceneError> {
+    match points {
+        Some(points) => {
+            chart
+                .draw_series(LineSeries::new(points, style))
+                .map_err(plot_error)?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + pt(10.0), y)], style));
+        }
+        None => {
+            chart
+                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                .map_err(plot_error)?
+                .label(format!("{label}: {why}"));
+        }
+    }
+    Ok(())
+}
+
 fn shapes_chart(
     root: &DrawingArea<SVGBackend<'_>, Shift>,
     title: &str,
@@ -50,8 +78,10 @@ fn shapes_chart(
     marks: &[TipMarks],
     legend: SeriesLabelPosition,
 ) -> Result<(), SceneError> {
+    // A curve whose solve did not converge is no answer: not drawn, named in the legend as failed.
     let mut points: Vec<(f64, f64)> = curves
         .iter()
+        .filter(|c| c.converged)
         .flat_map(|c| c.points.iter().map(|p| (p.x, p.y)))
         .collect();
     points.extend(
@@ -76,16 +106,15 @@ fn shapes_chart(
     let (mark, width) = (pt(MARK_PT), upt(CURVE_PT));
     for (i, curve) in curves.iter().enumerate() {
         let c = colour(i);
-        chart
-            .draw_series(LineSeries::new(
-                curve.points.iter().map(|p| (p.x, p.y)),
-                c.stroke_width(width),
-            ))
-            .map_err(plot_error)?
-            .label(format!("{} g", curve.mass_g))
-            .legend(move |(x, y)| {
-                PathElement::new([(x, y), (x + pt(10.0), y)], c.stroke_width(width))
-            });
+        line_or_failed(
+            &mut chart,
+            curve
+                .converged
+                .then(|| curve.points.iter().map(|p| (p.x, p.y))),
+            c.stroke_width(width),
+            format!("{} g", curve.mass_g),
+            "not converged",
+        )?;
         if let Some(m) = marks.get(i) {
             chart
                 .draw_series(
@@ -116,8 +145,16 @@ fn shapes_chart(
     series_labels(&mut chart, legend)
 }
 
-/// Our predicted cable change over a fine mass grid (to show the saturation), cm, for one scene.
-fn delta_curve(accurate: bool, masses_g: &[f64]) -> Result<Vec<(f64, f64)>, SceneError> {
+/// The cable changes from the 0 g length `baseline_cm` (None: its solve did not converge, so no
+/// curve) of the converged solves' `(mass g, length cm)`.
+fn changes_from(baseline_cm: Option<f64>, lengths_cm: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
+    let base = baseline_cm?;
+    Some(lengths_cm.iter().map(|&(g, l)| (g, l - base)).collect())
+}
+
+/// Our predicted cable change from 0 g over a fine mass grid (to show the saturation), cm, for one
+/// scene; None when the 0 g solve did not converge.
+fn delta_curve(accurate: bool, masses_g: &[f64]) -> Result<Option<Vec<(f64, f64)>>, SceneError> {
     let scene = if accurate {
         scenes::exp2_accurate()?
     } else {
@@ -127,31 +164,39 @@ fn delta_curve(accurate: bool, masses_g: &[f64]) -> Result<Vec<(f64, f64)>, Scen
         Model::<f64>::new(scene.rod()?).map_err(|e| SceneError::new("scene", e.to_string()))?;
     let settings = scene.shooting_settings()?;
     let gravity = Vector3::from(scene.gravity_m_s2);
-    let mut out = Vec::new();
-    let mut start = Start::Cold;
-    let mut reference = None;
-    for &g in masses_g {
+    let solve = |g: f64, start| {
         let eq = model
             .solve(&TipLoad::force(gravity * (g * KG_PER_G)), start, &settings)
             .map_err(|e| SceneError::new("tip", e.to_string()))?;
-        if !eq.report.termination.is_success() {
-            continue;
-        }
-        start = Start::Warm(eq.base_strain_per_m);
         let length_cm = eq.cable_lengths_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M;
-        let base = *reference.get_or_insert(length_cm);
-        out.push((g, length_cm - base));
+        Ok::<_, SceneError>(
+            eq.report
+                .termination
+                .is_success()
+                .then_some((eq.base_strain_per_m, length_cm)),
+        )
+    };
+    let baseline = solve(0.0, Start::Cold)?.map(|(_, length_cm)| length_cm);
+    let mut lengths = Vec::new();
+    let mut start = Start::Cold;
+    for &g in masses_g {
+        let Some((strain, length_cm)) = solve(g, start)? else {
+            continue;
+        };
+        start = Start::Warm(strain);
+        lengths.push((g, length_cm));
     }
-    Ok(out)
+    Ok(changes_from(baseline, &lengths))
 }
 
 fn delta_chart(
     root: &DrawingArea<SVGBackend<'_>, Shift>,
     table: &Table45,
-    curves: &[Vec<(f64, f64)>; 2],
+    curves: &[Option<Vec<(f64, f64)>>; 2],
 ) -> Result<(), SceneError> {
     let all = curves
         .iter()
+        .flatten()
         .flatten()
         .copied()
         .chain(table.rows.iter().map(|r| (r.mass_g, r.observed_cm + 0.05)))
@@ -179,16 +224,14 @@ fn delta_chart(
         .into_iter()
         .enumerate()
     {
-        chart
-            .draw_series(LineSeries::new(
-                curves[m].iter().copied(),
-                c.stroke_width(width),
-            ))
-            .map_err(plot_error)?
-            .label(format!("model, {name} guide mass"))
-            .legend(move |(x, y)| {
-                PathElement::new([(x, y), (x + pt(10.0), y)], c.stroke_width(width))
-            });
+        // No change without the 0 g length it is a change from.
+        line_or_failed(
+            &mut chart,
+            curves[m].as_ref().map(|curve| curve.iter().copied()),
+            c.stroke_width(width),
+            format!("model, {name} guide mass"),
+            "0 g not converged",
+        )?;
         chart
             .draw_series(
                 table
@@ -268,7 +311,11 @@ fn both(
 /// so that the figure is not mostly empty.
 fn shapes_aspect(curves: &[Curve]) -> f64 {
     let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
-    for p in curves.iter().flat_map(|c| &c.points) {
+    for p in curves
+        .iter()
+        .filter(|c| c.converged)
+        .flat_map(|c| &c.points)
+    {
         lo = (lo.0.min(p.x), lo.1.min(p.y));
         hi = (hi.0.max(p.x), hi.1.max(p.y));
     }
@@ -333,4 +380,52 @@ pub fn draw_validation(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, Scene
         delta_chart(a, &v.table_4_5, &curves)
     })?);
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::thesis::PointCm;
+
+    #[test]
+    fn the_cable_change_is_from_0_g_or_not_drawn() {
+        // 0 g did not converge: no curve, not one against the first mass that did.
+        assert_eq!(changes_from(None, &[(5.0, 38.1), (10.0, 38.3)]), None);
+        let curve = changes_from(Some(38.0), &[(5.0, 38.1), (10.0, 38.3)]).expect("a curve");
+        assert_eq!(curve.len(), 2);
+        assert!((curve[0].1 - 0.1).abs() < 1e-12 && (curve[1].1 - 0.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_curve_that_did_not_converge_is_named_not_drawn() {
+        let curve = |mass_g: f64, drop_cm: f64, converged| Curve {
+            mass_g,
+            points: vec![
+                PointCm { x: 0.0, y: 0.0 },
+                PointCm {
+                    x: 30.0,
+                    y: -drop_cm,
+                },
+            ],
+            converged,
+        };
+        let curves = [curve(10.0, 5.0, true), curve(20.0, 80.0, false)];
+        let file = std::env::temp_dir().join(format!("thesis-shapes-{}.svg", std::process::id()));
+        write(&file, (3.5, 3.0), |a| {
+            shapes_chart(a, "test", &curves, &[], SeriesLabelPosition::LowerLeft)
+        })
+        .expect("drawn");
+        let svg = std::fs::read_to_string(&file).expect("read");
+        let _ = std::fs::remove_file(&file);
+        let hex = |c: RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+        assert!(
+            svg.contains(&hex(colour(0))),
+            "the converged curve is drawn"
+        );
+        assert!(
+            !svg.to_uppercase().contains(&hex(colour(1))),
+            "the failed curve is drawn"
+        );
+        assert!(svg.contains("20 g: not converged"), "not named as failed");
+    }
 }

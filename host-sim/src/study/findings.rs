@@ -93,8 +93,10 @@ pub fn paired(
         .collect()
 }
 
+/// The time of one solve against another's, where both converged: a failed solve's time (cut
+/// short, or run to its limit) is no cost of an answer.
 fn time_ratio(a: &Row, b: &Row) -> Option<f64> {
-    Some(a.host_time_us / b.host_time_us)
+    (a.converged() && b.converged()).then(|| a.host_time_us / b.host_time_us)
 }
 
 fn error_ratio(a: &Row, b: &Row) -> Option<f64> {
@@ -306,13 +308,13 @@ fn kirchhoff(study: &Study) -> String {
     )
 }
 
-/// The median sweeps per cold solve of a family, over the scenes where `like` was measured too (all
-/// of the family's scenes when `like` is the family itself) and their step counts.
+/// The median sweeps per converged cold solve of a family, over the scenes where `like` was measured
+/// too (all of the family's scenes when `like` is the family itself) and their step counts.
 fn median_sweeps(study: &Study, family: &Family, like: &Family) -> Option<f64> {
     let sweeps: Vec<f64> = study
         .rows
         .iter()
-        .filter(|r| r.family == *family)
+        .filter(|r| r.family == *family && r.converged())
         .filter(|r| {
             study
                 .rows
@@ -462,7 +464,7 @@ fn micromath(study: &Study) -> String {
                         && q.scene == r.scene
                         && q.steps_per_section == r.steps_per_section
                 })
-                .map(|q| r.host_time_us / q.host_time_us)
+                .and_then(|q| time_ratio(r, q))
         })
         .collect();
     let time = Spread::of(&time).map_or("n/a".into(), |s| s.ratio());
@@ -703,4 +705,41 @@ pub fn conclusions(study: &Study) -> Vec<String> {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(termination: &str, host_time_us: f64) -> Row {
+        Row {
+            scene: "s".into(),
+            family: Family::REFERENCE,
+            steps_per_section: 3,
+            rk4_steps_per_sweep: 3,
+            cases: 1,
+            sweeps_per_solve: 4.0,
+            work_rk4_steps: 12.0,
+            host_time_us,
+            timed_runs: 1,
+            termination: termination.into(),
+            tip_error_m: None,
+            backbone_error_m: None,
+            cable_error_m: None,
+            tendon_work: None,
+            front_work: false,
+            front_time: false,
+        }
+    }
+
+    /// A solve that failed (here refused as under-resolved, or drifted) has a time but no answer:
+    /// no speed ratio is taken from it (the study's micromath ratio once reached 1.70 on such a
+    /// pair, where the pairs that converged give 0.94-1.03).
+    #[test]
+    fn no_time_ratio_is_taken_from_a_failed_solve() {
+        let ok = row("Converged", 10.0);
+        assert_eq!(time_ratio(&row("Converged", 5.0), &ok), Some(0.5));
+        assert_eq!(time_ratio(&row("UnderResolved (case 0)", 5.0), &ok), None);
+        assert_eq!(time_ratio(&ok, &row("FrameDrift (case 1)", 5.0)), None);
+    }
 }

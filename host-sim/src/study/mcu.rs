@@ -27,7 +27,8 @@ pub struct QemuCase {
     pub cold_instructions: u64,
     /// Sweeps of that solve.
     pub cold_sweeps: u32,
-    /// Whether it converged.
+    /// Whether it converged, and every other case of this step count read below (a case that did
+    /// not converge leaves its count out: `None`).
     pub converged: bool,
     /// Instructions of a cold inverse estimate (the bench's `inverse_cold`), if recorded.
     pub inverse_cold_instructions: Option<u64>,
@@ -99,6 +100,9 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
         let steps: u16 = number(&f, "steps_per_section")?;
         let total_steps: u32 = number(&f, "total_steps")?;
         let instructions: u64 = number(&f, "instructions")?;
+        // A case that did not converge has a count but no answer: it leaves the row unconverged
+        // (the study's check fails) and its count out of the tables.
+        let ok = f.get("converged") == Some(&"true");
         let index = match out.iter().position(|c| c.steps_per_section == steps) {
             Some(i) => i,
             None => {
@@ -108,7 +112,7 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
                     sweep_instructions: 0,
                     cold_instructions: 0,
                     cold_sweeps: 0,
-                    converged: false,
+                    converged: true,
                     inverse_cold_instructions: None,
                     update_warm_instructions: None,
                     update_warm_median_instructions: None,
@@ -121,22 +125,31 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
         let Some(case) = out.get_mut(index) else {
             continue;
         };
+        let answered = ok.then_some(instructions);
         match f.get("case").copied() {
             Some("sweep") => case.sweep_instructions = instructions,
             Some("forward_cold") => {
                 case.cold_instructions = instructions;
                 case.cold_sweeps = number(&f, "sweeps")?;
-                case.converged = f.get("converged") == Some(&"true");
+                case.converged &= ok;
             }
-            Some("inverse_cold") => case.inverse_cold_instructions = Some(instructions),
-            Some("update_warm") => case.update_warm_instructions = Some(instructions),
+            Some("inverse_cold") => {
+                case.inverse_cold_instructions = answered;
+                case.converged &= ok;
+            }
+            Some("update_warm") => {
+                case.update_warm_instructions = answered;
+                case.converged &= ok;
+            }
             Some("update_warm_median") => {
-                case.update_warm_median_instructions = Some(instructions);
+                case.update_warm_median_instructions = answered;
+                case.converged &= ok;
             }
             Some("update_one_sweep") => {
-                case.update_one_sweep_instructions = Some(instructions);
+                case.update_one_sweep_instructions = answered;
+                case.converged &= ok;
                 let lag_nm: f64 = number(&f, "tip_error_nm")?;
-                case.update_one_sweep_lag_m = Some(lag_nm * 1e-9);
+                case.update_one_sweep_lag_m = ok.then_some(lag_nm * 1e-9);
             }
             _ => {}
         }
@@ -252,11 +265,29 @@ mod tests {
     fn the_committed_bench_output_parses() {
         let cases = qemu_cases(BENCH_RUN).expect("bench.run parses");
         assert!(cases.len() >= 3);
+        assert!(cases.iter().all(|c| c.converged));
         assert!(
             cases
                 .iter()
                 .all(|c| c.sweep_instructions > 0 && c.cold_sweeps > 0)
         );
+        // A case that did not converge leaves its step count unconverged and its count out.
+        let failed = "bench case=sweep steps_per_section=5 total_steps=10 instructions=9 sweeps=1 converged=true\n\
+                      bench case=forward_cold steps_per_section=5 total_steps=10 instructions=90 sweeps=3 converged=true\n\
+                      bench case=update_warm steps_per_section=5 total_steps=10 instructions=50 sweeps=9 converged=false";
+        let cases = qemu_cases(failed).expect("parses");
+        let [case] = &cases[..] else {
+            panic!("one step count");
+        };
+        assert!(!case.converged);
+        assert_eq!(case.update_warm_instructions, None);
+        let passed = failed.replace("converged=false", "converged=true");
+        let cases = qemu_cases(&passed).expect("parses");
+        let [case] = &cases[..] else {
+            panic!("one step count");
+        };
+        assert!(case.converged);
+        assert_eq!(case.update_warm_instructions, Some(50));
         let f = bench_force_n(BENCH_RUN).expect("a force");
         assert!(f.iter().any(|x| *x != 0.0));
         // Whole nanonewtons divided by 1e9: the recorded decimal values themselves.

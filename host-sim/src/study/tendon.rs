@@ -278,7 +278,7 @@ pub fn checks(study: &TendonStudy) -> Vec<Check> {
             &mut out,
             r.qemu.converged && r.host_converged,
             format!(
-                "tendon MCU join, {}: QEMU and host f32 solves converged",
+                "tendon MCU join, {}: QEMU and host f32 and f64 solves converged",
                 r.qemu.case
             ),
         );

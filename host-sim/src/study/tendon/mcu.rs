@@ -362,7 +362,7 @@ pub struct TendonMcuRow {
     pub host_f32_us: f64,
     /// Host f64 time at the same steps, us.
     pub host_f64_us: f64,
-    /// Whether the host's f32 solves converged.
+    /// Whether the host's f32 and f64 solves converged.
     pub host_converged: bool,
     /// The host f32 tip against the converged f64 reference, m (the warm update: its worst tick).
     pub f32_error_m: f64,
@@ -443,14 +443,14 @@ pub fn study(timing: Timing) -> Result<TendonMcu, SceneError> {
             "tendon_displacement_cold" => max_tip(p.ticks.get(..1).unwrap_or(&[]), against),
             _ => max_tip(p.warm(), against.get(1..).unwrap_or(&[])),
         };
-        let (host_sweeps, host_f32_us, host_converged) = narrow.case(&q.case);
-        let (_, host_f64_us, _) = wide.case(&q.case);
+        let (host_sweeps, host_f32_us, f32_ok) = narrow.case(&q.case);
+        let (_, host_f64_us, f64_ok) = wide.case(&q.case);
         let first_recorded = recorded_tips.first().copied().unwrap_or_default();
         rows.push(TendonMcuRow {
             host_sweeps,
             host_f32_us,
             host_f64_us,
-            host_converged,
+            host_converged: f32_ok && f64_ok,
             f32_error_m: error(&narrow, &ref_tips, &reference.forward.tip_m),
             f64_error_m: error(&wide, &ref_tips, &reference.forward.tip_m),
             host_vs_trajectory_m: error(&narrow, &recorded_tips, &first_recorded),
