@@ -307,7 +307,8 @@ impl Problem {
                 scale *= 0.5;
             }
             if !accepted || step.norm() * scale < 1e-10 {
-                verdict.converged |= accepted;
+                // (A step made tiny by halving is no minimum: only a full step that small.)
+                verdict.converged |= accepted && step.norm() < 1e-10;
                 break;
             }
         }

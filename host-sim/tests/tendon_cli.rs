@@ -1369,7 +1369,6 @@ fn a_displacement_solve_that_stalls_is_no_answer() {
     let v = json_of(&json);
     assert_ne!(v["status"]["verdict"], "answer", "{}", v["status"]);
     assert_eq!(v["tendons"]["displacement_solve"]["termination"], "Stalled");
-    assert_eq!(v["report"]["termination"], "Converged");
     assert!(v["tip_position_m"].is_null() && v["tendons"]["tensions_n"].is_null());
     let text = stdout(&host_sim(&["solve", &path, d]));
     assert!(

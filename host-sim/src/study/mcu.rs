@@ -27,8 +27,9 @@ pub struct QemuCase {
     pub cold_instructions: u64,
     /// Sweeps of that solve.
     pub cold_sweeps: u32,
-    /// Whether it converged, and every other case of this step count read below (a case that did
-    /// not converge leaves its count out: `None`).
+    /// Whether it converged, and every other case of this step count read below (each of those
+    /// leaves its count out, `None`, where it did not converge; the cold solve's count stays, and
+    /// this flag fails the study's check).
     pub converged: bool,
     /// Instructions of a cold inverse estimate (the bench's `inverse_cold`), if recorded.
     pub inverse_cold_instructions: Option<u64>,

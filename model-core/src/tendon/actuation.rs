@@ -80,6 +80,10 @@ pub struct DisplacementSolve<T> {
     pub states: Vec<TendonState, MAX_TENDONS>,
     /// Why it stopped; only `Converged` with a successful `solved` is an answer.
     pub termination: Termination,
+    /// The size of the complementarity residual where it stopped, dimensionless as
+    /// [`DisplacementSettings::tolerance`] (the largest number after a failed forward solve):
+    /// within the tolerance wherever `termination` is `Converged`.
+    pub residual: T,
     /// Semi-smooth Newton iterations.
     pub iterations: u16,
     /// Sweeps spent, forward solves and sensitivities together.
@@ -486,14 +490,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
             let (r, parts, phi) = residual_of(&current, &tau);
             let size = residual_size(&r);
-            if size <= floor {
-                // At the rounding floor: an answer only if that meets the tolerance (a path
-                // resolved to a few `eps L` may be more than a tolerance times the offset: f32,
-                // offsets below about L / 250 at the default tolerance).
-                if size > settings.tolerance {
-                    termination = Termination::Stalled;
-                    break;
-                }
+            // At the rounding floor, an answer where that meets the tolerance. (A path resolved to
+            // a few `eps L` may be more than a tolerance times the offset, in f32 with offsets
+            // below about L / 250 at the default tolerance: the floor is an estimate, so the
+            // steps go on, and where none improves the solve ends `Stalled` below.)
+            if size <= floor && size <= settings.tolerance {
                 termination = Termination::Converged;
                 if fresh || !hand_on {
                     break;
@@ -672,10 +673,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
         }
         let (r, _, phi) = residual_of(&current, &tau);
-        if termination == Termination::IterationLimit
-            && current.is_success()
-            && residual_size(&r) <= settings.tolerance
-        {
+        // (A failed forward solve has no paths: no residual either.)
+        let residual = if current.is_success() {
+            residual_size(&r)
+        } else {
+            T::max_value().unwrap_or_else(T::one)
+        };
+        if termination == Termination::IterationLimit && residual <= settings.tolerance {
             termination = Termination::Converged;
         }
         let mut slack_m = Vec::new();
@@ -699,6 +703,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             slack_m,
             states,
             termination,
+            residual,
             iterations,
             sweeps,
             has_sensitivity: sens.is_some(),

@@ -233,7 +233,7 @@ mod tests {
     use super::*;
 
     /// A residual with a component that is not a number is no answer: its size meets no tolerance
-    /// (nalgebra's `amax` alone gives the largest of the other components).
+    /// (nalgebra's `amax` alone passed over NaN and gave the largest of the others).
     #[test]
     fn a_residual_that_is_not_a_number_meets_no_tolerance() {
         let mut r = SVector::<f64, MAX_TENDONS>::zeros();
@@ -241,7 +241,6 @@ mod tests {
         assert_eq!(residual_size(&r), 3e-5);
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             r[0] = bad;
-            assert!(r.amax() <= 3e-5 || bad.is_infinite());
             assert!(residual_size(&r) >= f64::MAX, "{bad}");
         }
     }

@@ -947,10 +947,6 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         }
         let nine = T::lit(9.0);
         let mut verdict = best.quality.determination;
-        // A restart gets a dozen iterations: one that has not come within reach of the answer's
-        // misfit by then is no rival; one that has, but unconverged, leaves the answer unverified.
-        let full = self.settings.max_iterations;
-        self.settings.max_iterations = full.min(RESTART_ITERATIONS);
         let best_theta = |e: &TendonEstimate<T>, count: usize| {
             let mut theta = Theta::zeros();
             for (t, v) in theta.iter_mut().zip(&e.solved.tensions_n) {
@@ -967,10 +963,13 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
         // The answer's own misfit, evaluated again: where that fails, no rival can be judged
         // against it, and the search vouches for nothing.
         let Some(best_cost) = self.cost_of(&answer, &best.solved)? else {
-            self.settings.max_iterations = full;
             best.quality.determination = verdict.at_best(Determination::Unverified);
             return Ok(());
         };
+        // A restart gets a dozen iterations: one that has not come within reach of the answer's
+        // misfit by then is no rival; one that has, but unconverged, leaves the answer unverified.
+        let full = self.settings.max_iterations;
+        self.settings.max_iterations = full.min(RESTART_ITERATIONS);
         for force0 in self.scan_starts(&answer) {
             let Ok(outcome) = self.fit(force0, None)? else {
                 continue;
