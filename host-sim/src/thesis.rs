@@ -329,10 +329,9 @@ impl Validation {
             check(
                 &format!(
                     "Table 4.1: worst distance from the thesis's predicted section tips, cm{}",
-                    left_out_note(
-                        not_converged(&self.table_4_1.section1)
-                            + not_converged(&self.table_4_1.section2)
-                    )
+                    // (A row's two section tips come from one solve: a row, as the check below
+                    // counts them, is a section 1 tip.)
+                    left_out_note(not_converged(&self.table_4_1.section1))
                 ),
                 self.table_4_1.worst_reproduction_cm(),
                 TOL_4_1_CM,

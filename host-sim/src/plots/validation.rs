@@ -152,8 +152,8 @@ fn changes_from(baseline_cm: Option<f64>, lengths_cm: &[(f64, f64)]) -> Option<V
     Some(lengths_cm.iter().map(|&(g, l)| (g, l - base)).collect())
 }
 
-/// Our predicted cable change from 0 g over a fine mass grid (to show the saturation), cm, for one
-/// scene; None when the 0 g solve did not converge.
+/// Our predicted cable change from 0 g over a fine mass grid from 0 g (to show the saturation), cm,
+/// for one scene; None when the 0 g solve did not converge.
 fn delta_curve(accurate: bool, masses_g: &[f64]) -> Result<Option<Vec<(f64, f64)>>, SceneError> {
     let scene = if accurate {
         scenes::exp2_accurate()?
@@ -164,26 +164,25 @@ fn delta_curve(accurate: bool, masses_g: &[f64]) -> Result<Option<Vec<(f64, f64)
         Model::<f64>::new(scene.rod()?).map_err(|e| SceneError::new("scene", e.to_string()))?;
     let settings = scene.shooting_settings()?;
     let gravity = Vector3::from(scene.gravity_m_s2);
-    let solve = |g: f64, start| {
+    let mut lengths = Vec::new();
+    let mut baseline_cm = None;
+    let mut start = Start::Cold;
+    for &g in masses_g {
         let eq = model
             .solve(&TipLoad::force(gravity * (g * KG_PER_G)), start, &settings)
             .map_err(|e| SceneError::new("tip", e.to_string()))?;
-        let length_cm = eq.cable_lengths_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M;
         // An answer as the tables take one: converged to a stable equilibrium.
-        let answer = eq.report.termination.is_success() && eq.report.stability == Stability::Stable;
-        Ok::<_, SceneError>(answer.then_some((eq.base_strain_per_m, length_cm)))
-    };
-    let baseline = solve(0.0, Start::Cold)?.map(|(_, length_cm)| length_cm);
-    let mut lengths = Vec::new();
-    let mut start = Start::Cold;
-    for &g in masses_g {
-        let Some((strain, length_cm)) = solve(g, start)? else {
+        if !(eq.report.termination.is_success() && eq.report.stability == Stability::Stable) {
             continue;
-        };
-        start = Start::Warm(strain);
+        }
+        start = Start::Warm(eq.base_strain_per_m);
+        let length_cm = eq.cable_lengths_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M;
+        if g == 0.0 {
+            baseline_cm = Some(length_cm);
+        }
         lengths.push((g, length_cm));
     }
-    Ok(changes_from(baseline, &lengths))
+    Ok(changes_from(baseline_cm, &lengths))
 }
 
 fn delta_chart(

@@ -102,7 +102,7 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
         let total_steps: u32 = number(&f, "total_steps")?;
         let instructions: u64 = number(&f, "instructions")?;
         // A case that did not converge has a count but no answer: it leaves the row unconverged
-        // (the study's check fails) and its count out of the tables.
+        // (the study's check fails) and, but for the cold solve, its count out of the tables.
         let ok = f.get("converged") == Some(&"true");
         let index = match out.iter().position(|c| c.steps_per_section == steps) {
             Some(i) => i,
@@ -126,34 +126,30 @@ pub fn qemu_cases(text: &str) -> Result<Vec<QemuCase>, SceneError> {
         let Some(case) = out.get_mut(index) else {
             continue;
         };
-        let answered = ok.then_some(instructions);
-        match f.get("case").copied() {
-            Some("sweep") => case.sweep_instructions = instructions,
+        let answered = match f.get("case").copied() {
+            Some("sweep") => {
+                case.sweep_instructions = instructions;
+                continue;
+            }
             Some("forward_cold") => {
                 case.cold_instructions = instructions;
                 case.cold_sweeps = number(&f, "sweeps")?;
-                case.converged &= ok;
+                None
             }
-            Some("inverse_cold") => {
-                case.inverse_cold_instructions = answered;
-                case.converged &= ok;
-            }
-            Some("update_warm") => {
-                case.update_warm_instructions = answered;
-                case.converged &= ok;
-            }
-            Some("update_warm_median") => {
-                case.update_warm_median_instructions = answered;
-                case.converged &= ok;
-            }
+            Some("inverse_cold") => Some(&mut case.inverse_cold_instructions),
+            Some("update_warm") => Some(&mut case.update_warm_instructions),
+            Some("update_warm_median") => Some(&mut case.update_warm_median_instructions),
             Some("update_one_sweep") => {
-                case.update_one_sweep_instructions = answered;
-                case.converged &= ok;
                 let lag_nm: f64 = number(&f, "tip_error_nm")?;
                 case.update_one_sweep_lag_m = ok.then_some(lag_nm * 1e-9);
+                Some(&mut case.update_one_sweep_instructions)
             }
-            _ => {}
+            _ => continue,
+        };
+        if let Some(count) = answered {
+            *count = ok.then_some(instructions);
         }
+        case.converged &= ok;
     }
     if out.is_empty()
         || out
