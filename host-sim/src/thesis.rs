@@ -391,9 +391,8 @@ impl Validation {
     }
 }
 
-/// Solves a scene's rod under a tip weight and returns the shape at `s_m`, the cable lengths and the report.
+/// A scene's rod solved under a tip weight: the cable lengths and the report.
 pub(crate) struct Solved {
-    pub points: Vec<ShapePoint<f64>>,
     pub cables_m: Vec<f64>,
     pub converged: bool,
     pub stability: Stability<f64>,
@@ -406,26 +405,34 @@ impl Solved {
     }
 }
 
-pub(crate) fn solve_rows(
+/// A backbone at each of several sets of arc lengths.
+pub(crate) type Shapes<const N: usize> = [Vec<ShapePoint<f64>>; N];
+
+/// Solves a scene's rod under `load` (cold), and its backbone at each set of arc lengths in
+/// `point_sets` (each increasing), from the one solve.
+pub(crate) fn solve_rows<const N: usize>(
     model: &Model<f64>,
     scene: &Scene,
     load: &TipLoad<f64>,
-    s_m: &[f64],
-) -> Result<Solved, SceneError> {
+    point_sets: [&[f64]; N],
+) -> Result<(Solved, Shapes<N>), SceneError> {
     let settings = scene.shooting_settings()?;
     let eq = model
         .solve(load, Start::Cold, &settings)
         .map_err(|e| SceneError::new("tip", e.to_string()))?;
-    let mut points = vec![ShapePoint::default(); s_m.len()];
-    model
-        .shape(&eq, s_m, &mut points)
-        .map_err(|e| SceneError::new("output", e.to_string()))?;
-    Ok(Solved {
-        points,
+    let mut shapes: Shapes<N> = core::array::from_fn(|_| Vec::new());
+    for (points, s_m) in shapes.iter_mut().zip(point_sets) {
+        points.resize(s_m.len(), ShapePoint::default());
+        model
+            .shape(&eq, s_m, points)
+            .map_err(|e| SceneError::new("output", e.to_string()))?;
+    }
+    let solved = Solved {
         cables_m: eq.cable_lengths_m.iter().copied().collect(),
         converged: eq.report.termination.is_success(),
         stability: eq.report.stability,
-    })
+    };
+    Ok((solved, shapes))
 }
 
 fn weight(scene: &Scene, mass_g: f64) -> TipLoad<f64> {
@@ -457,9 +464,14 @@ pub fn table_4_1() -> Result<Table41, SceneError> {
         rod.push_load(PointLoad::mass(transition_m, mass_g * KG_PER_G))
             .map_err(|e| SceneError::new("load", e.to_string()))?;
         let model = Model::<f64>::new(rod).map_err(|e| SceneError::new("scene", e.to_string()))?;
-        let tips = solve_rows(&model, &scene, &TipLoad::zero(), &[transition_m, length_m])?;
-        let curve = solve_rows(&model, &scene, &TipLoad::zero(), &curve_s)?;
-        let converged = tips.is_answer();
+        // The section tips and the curve from one solve.
+        let (solved, [tips, curve]) = solve_rows(
+            &model,
+            &scene,
+            &TipLoad::zero(),
+            [&[transition_m, length_m], &curve_s],
+        )?;
+        let converged = solved.is_answer();
         for (i, (section, observed, thesis)) in [
             (&mut out.section1, (row[1], row[2]), (row[5], row[6])),
             (&mut out.section2, (row[3], row[4]), (row[7], row[8])),
@@ -467,7 +479,7 @@ pub fn table_4_1() -> Result<Table41, SceneError> {
         .into_iter()
         .enumerate()
         {
-            let ours = tips.points.get(i).map_or(
+            let ours = tips.get(i).map_or(
                 PointCm {
                     x: f64::NAN,
                     y: f64::NAN,
@@ -486,17 +498,16 @@ pub fn table_4_1() -> Result<Table41, SceneError> {
                 },
                 ours,
                 converged,
-                stability: tips.stability,
+                stability: solved.stability,
             });
         }
         out.curves.push(Curve {
             mass_g,
             points: curve
-                .points
                 .iter()
                 .map(|p| PointCm::from_m(&p.position_m))
                 .collect(),
-            converged: curve.is_answer(),
+            converged,
         });
     }
     Ok(out)
@@ -522,8 +533,8 @@ pub fn table_4_3(accurate: bool) -> Result<Table43, SceneError> {
     for row in csv_rows::<5>(reference::TABLE_4_3_CSV) {
         let row = row.map_err(table_error)?;
         let mass_g = row[0];
-        let solved = solve_rows(&model, &scene, &weight(&scene, mass_g), &curve_s)?;
-        let tip = solved.points.last().map_or(
+        let (solved, [points]) = solve_rows(&model, &scene, &weight(&scene, mass_g), [&curve_s])?;
+        let tip = points.last().map_or(
             PointCm {
                 x: f64::NAN,
                 y: f64::NAN,
@@ -546,8 +557,7 @@ pub fn table_4_3(accurate: bool) -> Result<Table43, SceneError> {
         });
         out.curves.push(Curve {
             mass_g,
-            points: solved
-                .points
+            points: points
                 .iter()
                 .map(|p| PointCm::from_m(&p.position_m))
                 .collect(),
@@ -571,7 +581,7 @@ pub fn table_4_5() -> Result<Table45, SceneError> {
         let mass_g = row[0];
         let mut length_cm = [None; 2];
         for (m, (model, scene)) in models.iter().zip(&scenes).enumerate() {
-            let solved = solve_rows(model, scene, &weight(scene, mass_g), &[])?;
+            let (solved, []) = solve_rows(model, scene, &weight(scene, mass_g), [])?;
             length_cm[m] = solved
                 .is_answer()
                 .then(|| solved.cables_m.first().copied().unwrap_or(f64::NAN) * CM_PER_M);
@@ -645,7 +655,7 @@ pub fn inverse_table(accurate: bool) -> Result<Vec<InverseRow>, SceneError> {
         max_force_std_n: scene.estimate.max_force_std_n,
         ..InverseSettings::with_resolution(scene.estimate.resolution_m)
     };
-    let unloaded = solve_rows(&model, &scene, &TipLoad::zero(), &[])?;
+    let (unloaded, []) = solve_rows(&model, &scene, &TipLoad::zero(), [])?;
     if !unloaded.is_answer() {
         return Err(SceneError::new(
             "0 g reference",
@@ -823,7 +833,6 @@ mod tests {
     #[test]
     fn only_a_converged_stable_solve_is_an_answer() {
         let solved = |converged, stability| Solved {
-            points: Vec::new(),
             cables_m: Vec::new(),
             converged,
             stability,

@@ -412,6 +412,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             .largest_offset_m()
             .max(self.length_m() * T::lit(1e-3));
 
+        // Success, wherever the solve stops: the residual within the tolerance (a NaN meets none;
+        // the one rule, applied where the loop ends and, to stop it, at the floor).
+        let met = |size: T| size <= settings.tolerance;
         // The rounding floor of the residual: a path resolved to a few `eps L`.
         let floor = T::default_epsilon() * T::lit(8.0) * (self.length_m() / radius + T::one());
         let mut tau = [T::zero(); MAX_TENDONS];
@@ -494,7 +497,7 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             // a few `eps L` may be more than a tolerance times the offset, in f32 with offsets
             // below about L / 250 at the default tolerance: the floor is an estimate, so the
             // steps go on, and where none improves the solve ends `Stalled` below.)
-            if size <= floor && size <= settings.tolerance {
+            if size <= floor && met(size) {
                 termination = Termination::Converged;
                 if fresh || !hand_on {
                     break;
@@ -662,12 +665,9 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
                     sens = None;
                 }
                 None => {
-                    // At the floor of the forward solves' rounding: an answer if within tolerance.
-                    termination = if size <= settings.tolerance {
-                        Termination::Converged
-                    } else {
-                        Termination::Stalled
-                    };
+                    // At the floor of the forward solves' rounding (an answer if within the
+                    // tolerance: below).
+                    termination = Termination::Stalled;
                     break;
                 }
             }
@@ -679,9 +679,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
         } else {
             T::max_value().unwrap_or_else(T::one)
         };
-        if termination == Termination::IterationLimit && residual <= settings.tolerance {
-            termination = Termination::Converged;
-        }
+        // Wherever the loop stopped (at the floor, where no step improved, at its iteration limit,
+        // where a sensitivity or a step could not be formed), the answer is one exactly when its
+        // forward solve succeeded within the tolerance.
+        termination = match (current.is_success() && met(residual), termination) {
+            (true, _) => Termination::Converged,
+            (false, Termination::Converged) => Termination::Stalled,
+            (false, stopped) => stopped,
+        };
         let mut slack_m = Vec::new();
         let mut states = Vec::new();
         for (t, p) in tau.iter().zip(&phi).take(count) {

@@ -3,7 +3,7 @@
 
 use model_core::reduction::TendonModel;
 
-use super::super::findings::Spread;
+use super::super::findings::{Spread, converged_ratio, join, paired};
 use super::super::measure::Row;
 use super::super::numbers::{sig, us};
 use super::super::variants::{Arithmetic, Family, Reduction};
@@ -13,14 +13,6 @@ use super::{TendonStudy, picker};
 
 /// Tolerances the "fastest within" paragraph reads, m.
 pub const TOLERANCES_M: [f64; 6] = picker::FULL_TOLERANCES_M;
-
-fn join(parts: &[String]) -> String {
-    match parts {
-        [] => String::new(),
-        [one] => one.clone(),
-        [init @ .., last] => format!("{} and {last}", init.join(", ")),
-    }
-}
 
 /// A scene's rows of one family, by steps per section.
 pub fn series<'a>(study: &'a TendonStudy, scene: &str, family: &Family) -> Vec<&'a Row> {
@@ -130,31 +122,6 @@ fn steps(study: &TendonStudy) -> String {
     )
 }
 
-fn ratio_at_equal_steps(
-    study: &TendonStudy,
-    a: &Family,
-    b: &Family,
-    f: fn(&Row) -> f64,
-) -> Vec<f64> {
-    study
-        .rows
-        .iter()
-        .filter(|r| r.family == *a && r.converged())
-        .filter_map(|r| {
-            study
-                .rows
-                .iter()
-                .find(|q| {
-                    q.family == *b
-                        && q.scene == r.scene
-                        && q.steps_per_section == r.steps_per_section
-                        && q.converged()
-                })
-                .map(|q| f(r) / f(q))
-        })
-        .collect()
-}
-
 /// The smallest of [`TOLERANCES_M`] an error is within.
 fn reach(error_m: f64) -> Option<f64> {
     TOLERANCES_M
@@ -192,10 +159,22 @@ fn continuous_paragraph(study: &TendonStudy) -> String {
             None => format!("none of the tolerances on {key}"),
         });
     }
-    let time = Spread::of(&ratio_at_equal_steps(study, &c, &d, |r| r.host_time_us))
-        .map_or("n/a".into(), |s| s.ratio());
-    let sweeps = Spread::of(&ratio_at_equal_steps(study, &c, &d, |r| r.sweeps_per_solve))
-        .map_or("n/a".into(), |s| s.ratio());
+    let time = Spread::of(&paired(
+        &study.rows,
+        &c,
+        &d,
+        0,
+        converged_ratio(|r| r.host_time_us),
+    ))
+    .map_or("n/a".into(), |s| s.ratio());
+    let sweeps = Spread::of(&paired(
+        &study.rows,
+        &c,
+        &d,
+        0,
+        converged_ratio(|r| r.sweeps_per_solve),
+    ))
+    .map_or("n/a".into(), |s| s.ratio());
     format!(
         "**Continuous routing** (Rucker & Webster) stops improving at {}: the routing's modelling \
          error (the tendon follows the backbone instead of running in chords between guides; the \
@@ -245,18 +224,20 @@ fn f32_paragraph(study: &TendonStudy) -> String {
             .unwrap_or_default();
         parts.push(format!("{} um on {key}{refused}", um(best)));
     }
-    let time = Spread::of(&ratio_at_equal_steps(
-        study,
+    let time = Spread::of(&paired(
+        &study.rows,
         &f,
         &discrete(Arithmetic::F64),
-        |r| r.host_time_us,
+        0,
+        converged_ratio(|r| r.host_time_us),
     ))
     .map_or("n/a".into(), |s| s.ratio());
-    let sweeps = Spread::of(&ratio_at_equal_steps(
-        study,
+    let sweeps = Spread::of(&paired(
+        &study.rows,
         &f,
         &discrete(Arithmetic::F64),
-        |r| r.sweeps_per_solve,
+        0,
+        converged_ratio(|r| r.sweeps_per_solve),
     ))
     .map_or("n/a".into(), |s| s.ratio());
     format!(
