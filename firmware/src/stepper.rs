@@ -12,7 +12,8 @@ use core::num::NonZeroU32;
 /// A stepper setting the scale refuses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub enum ScaleError {
-    /// Counts and microsteps per turn must be positive, and their reduced product below 2^31.
+    /// Counts and microsteps per turn must be positive, and their reduced product plus the larger
+    /// of them must fit a `u32` (the rounding's arithmetic).
     Range,
 }
 
@@ -57,19 +58,23 @@ impl StepperScale {
     /// microsteps (full steps times the driver's microstepping).
     ///
     /// # Errors
-    /// [`ScaleError::Range`] for a zero, or for a reduced fraction whose terms multiply past `u32`.
+    /// [`ScaleError::Range`] for a zero, or for a reduced fraction whose rounding would pass `u32`
+    /// (its terms' product plus the larger term).
     pub const fn new(counts_per_turn: u32, microsteps_per_turn: u32) -> Result<Self, ScaleError> {
         if counts_per_turn == 0 || microsteps_per_turn == 0 {
             return Err(ScaleError::Range);
         }
         let g = gcd(counts_per_turn, microsteps_per_turn);
         let (counts, steps) = (counts_per_turn / g, microsteps_per_turn / g);
-        // Rounding a remainder multiplies it (below one term) by the other: that must fit a u32.
-        match (
-            counts.checked_mul(steps),
-            NonZeroU32::new(counts),
-            NonZeroU32::new(steps),
-        ) {
+        // Rounding a remainder multiplies it (below one term) by the other and adds half the
+        // first: `(d - 1) n + d / 2 <= n d + max(n, d)` must fit a u32 (`n d` alone fitting is not
+        // enough: 4 / 1 073 741 823 overflowed).
+        let larger = if counts > steps { counts } else { steps };
+        let bound = match counts.checked_mul(steps) {
+            Some(product) => product.checked_add(larger),
+            None => None,
+        };
+        match (bound, NonZeroU32::new(counts), NonZeroU32::new(steps)) {
             (Some(_), Some(counts), Some(steps)) => Ok(Self { counts, steps }),
             _ => Err(ScaleError::Range),
         }
@@ -123,6 +128,12 @@ mod tests {
         assert_eq!(StepperScale::new(0, 3200), Err(ScaleError::Range));
         assert_eq!(StepperScale::new(16_384, 0), Err(ScaleError::Range));
         assert_eq!(StepperScale::new(65_537, 65_539), Err(ScaleError::Range));
+        // The product fits, the rounding's sum would not (it overflowed in `counts`).
+        assert_eq!(StepperScale::new(4, 1_073_741_823), Err(ScaleError::Range));
+        // The largest scale of that kind the rounding holds converts without overflow.
+        let edge = StepperScale::new(3, 1_073_741_823)?;
+        assert_eq!(edge.counts(1_073_741_822), 3);
+        assert_eq!(edge.steps(2), 715_827_882);
         // Halves round away from zero, the same both ways.
         let half = StepperScale::new(1, 2)?;
         assert_eq!(

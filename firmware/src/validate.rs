@@ -143,8 +143,12 @@ impl ReadingValidator {
             *slot = length_m;
         }
         if let Some(last) = &self.last {
-            // Samples since the last accepted reading (at least one): the cable could move that much.
-            let samples = seq.wrapping_sub(last.seq).max(1) as f32;
+            // Samples since the last accepted reading: the cable could move that much. A sample
+            // that is not newer (the same one again, or an older one: a wrapped difference in the
+            // upper half of the range) had no time to move in, and gets the margin alone (an older
+            // one once wrapped to about 4e9 samples, and any length passed).
+            let elapsed = seq.wrapping_sub(last.seq);
+            let samples = if elapsed > u32::MAX / 2 { 0 } else { elapsed } as f32;
             let limit_m = self.max_step_per_sample_m * samples + self.margin_m;
             for (index, (now, before)) in lengths_m.iter().zip(last.lengths_m).enumerate() {
                 let step_m = now - before;
@@ -253,6 +257,23 @@ mod tests {
         }
         // The same move over two samples is plausible.
         assert_eq!(v.check(12, &ok(moved)), Ok(moved));
+        // A sample no newer than the last accepted one had no time to move: the margin alone.
+        v.accept(20, GOOD);
+        let nudged = [GOOD[0], GOOD[1] + 2e-5, GOOD[2]];
+        for stale in [20, 19, 0] {
+            match v.check(stale, &ok(nudged)) {
+                Err(Rejection::Jump {
+                    cable: 1, limit_m, ..
+                }) => {
+                    assert!((limit_m - 1e-5).abs() < 1e-12, "{limit_m}");
+                }
+                other => panic!("expected a jump on cable 1 at sample {stale}, got {other:?}"),
+            }
+        }
+        assert_eq!(v.check(20, &ok(GOOD)), Ok(GOOD));
+        // Across the counter's wrap, a newer sample is newer.
+        v.accept(u32::MAX, GOOD);
+        assert_eq!(v.check(1, &ok(moved)), Ok(moved));
         // Forgotten: anything in range goes.
         v.forget();
         let far = [GOOD[0] + 0.01, GOOD[1], GOOD[2]];

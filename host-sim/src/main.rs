@@ -252,7 +252,8 @@ fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
         .map(|p| p.trim().parse::<f64>().map_err(|e| format!("\"{p}\": {e}")))
         .collect::<Result<_, _>>()?;
     match parts.as_slice() {
-        [x, y, z] => Ok(Vector3::new(*x, *y, *z)),
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
+        [_, _, _] => Err("every component must be a finite number".into()),
         _ => Err(format!(
             "expected three comma-separated numbers, got {}",
             parts.len()
@@ -686,12 +687,16 @@ fn main() -> ExitCode {
         Command::Reference(args) => return host_sim::monitor::reference::main(&args),
         Command::Validate { plots } => match thesis::validate() {
             Ok(v) => {
-                print!("{}", report::validation(&v));
+                if let Err(e) = emit(&report::validation(&v), None) {
+                    return fail(&e);
+                }
                 if let Some(dir) = plots {
                     if let Err(e) = host_sim::plots::draw_validation(&v, &dir) {
                         return fail(&e);
                     }
-                    println!("\nplots written to {}", dir.display());
+                    if let Err(e) = emit(&format!("\nplots written to {}\n", dir.display()), None) {
+                        return fail(&e);
+                    }
                 }
                 return if v.checks().iter().all(|c| c.passed) {
                     ExitCode::SUCCESS
@@ -703,10 +708,10 @@ fn main() -> ExitCode {
         },
         Command::Inverse => (|| {
             for (name, accurate) in [("average", false), ("accurate", true)] {
-                print!(
-                    "{}",
-                    report::inverse(name, &thesis::inverse_table(accurate)?)
-                );
+                emit(
+                    &report::inverse(name, &thesis::inverse_table(accurate)?),
+                    None,
+                )?;
             }
             Ok(exit::ANSWER)
         })(),
@@ -745,7 +750,7 @@ fn main() -> ExitCode {
             bar.set_message("fits (all rows, then leave-one-out)");
             let result = calibrate::calibrate(dataset, fit_density, || bar.inc(1));
             bar.finish_and_clear();
-            print!("{}", report::calibration(&result?));
+            emit(&report::calibration(&result?), None)?;
             Ok(exit::ANSWER)
         })(),
         Command::Solve {

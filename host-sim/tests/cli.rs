@@ -925,3 +925,35 @@ fn a_drifted_frame_is_no_answer() {
     assert_eq!(v["status"]["termination"], "FrameDrift");
     assert!(v["cable_lengths_m"].is_null(), "{v}");
 }
+
+/// A reader that has gone (a closed pipe, a full disk) is an I/O error, exit 1, not a panic
+/// (`print!` panicked with exit 101); a tip force that is not a number is a usage error, exit 2
+/// (it was blamed on the scene file's `[tip]`).
+#[test]
+fn output_that_cannot_be_written_and_a_tip_force_that_is_no_number_are_errors() {
+    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full");
+    for args in [
+        vec!["inverse"],
+        vec!["validate"],
+        vec!["solve", &scene("bench_3d_cables.toml")],
+    ] {
+        let Ok(sink) = full() else {
+            return; // (no /dev/full here)
+        };
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(&args)
+            .stdout(sink)
+            .output()
+            .expect("host-sim runs");
+        assert_eq!(code(&out), 1, "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains("cannot write"), "{args:?}");
+    }
+    let out = host_sim(&[
+        "solve",
+        &scene("bench_3d_cables.toml"),
+        "--tip-force",
+        "nan,0,0",
+    ]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(stderr(&out).contains("finite"), "{}", stderr(&out));
+}

@@ -92,6 +92,39 @@ fn a_reference_is_the_robots_forward_solve_at_each_tick() {
     }
 }
 
+/// The reference solves the robot the file describes: in the file's frame representation, and
+/// not at all a robot with tendons (a load path of tip forces does not say their actuation; its
+/// rod alone, solved before, was another robot, and the reference said nothing).
+#[test]
+fn a_reference_is_of_the_files_robot_or_refused() {
+    let path = [AppliedForce {
+        tick: 0,
+        force_n: Vector3::new(0.0, -0.01, 0.005),
+    }];
+    let scenes = format!("{}/scenes", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(format!("{scenes}/tendon_bench.toml")).expect("reads");
+    let tendons = Scene::parse(&text, "tendon_bench.toml").expect("parses");
+    let e = reference_csv(&tendons, &path, 4).expect_err("a tendon robot is refused");
+    assert!(e.reason.contains("tendons"), "{e}");
+    let mut scene = robot("two_section.toml");
+    let quaternion = reference_csv(&scene, &path, 4).expect("a reference");
+    scene.solver.attitude = "rotation-matrix".into();
+    let matrix = reference_csv(&scene, &path, 4).expect("a reference");
+    let tip = |csv: &str| {
+        Reference::parse(csv, "reference")
+            .expect("monitor reads it")
+            .ticks[0]
+            .tip_m
+    };
+    // Another discretisation of the frame (the matrix's RK4 steps are not the quaternion's):
+    // close, not equal.
+    let moved = (tip(&quaternion) - tip(&matrix)).norm();
+    assert!(moved > 0.0 && moved < 1e-5, "{moved}");
+    for bad in [0, 100_001] {
+        assert!(reference_csv(&scene, &path, bad).is_err(), "{bad} points");
+    }
+}
+
 #[test]
 fn a_load_path_that_cannot_be_read_is_refused() {
     for (text, says) in [
@@ -155,4 +188,37 @@ fn host_sim_reference_writes_the_file_and_refuses_bad_input() {
     ]);
     assert_eq!(code(&out), 1);
     assert!(stderr(&out).contains("no column"), "{}", stderr(&out));
+}
+
+/// A tolerance loose enough that a "converged" answer is none is refused (at 1.0 the bench's tip
+/// came out 11 mm off, converged in no iteration), a loose one warned about; an empty list of
+/// output points, which would leave a CSV without even its status, is refused.
+#[test]
+fn a_loose_tolerance_and_no_output_points_are_refused() {
+    let mut scene = robot("bench.toml");
+    for (tolerance, refused, warned) in [
+        (1.0, true, false),
+        (2e-3, true, false),
+        (1e-3, false, true),
+        (1e-4, false, true),
+        (1e-8, false, false),
+    ] {
+        scene.solver.tolerance = Some(tolerance);
+        assert_eq!(
+            scene.shooting_settings().is_err(),
+            refused,
+            "tolerance {tolerance}"
+        );
+        let warnings = scene.warnings();
+        assert_eq!(
+            warnings.iter().any(|w| w.field == "solver.tolerance"),
+            warned,
+            "tolerance {tolerance}: {warnings:?}"
+        );
+    }
+    scene.output.s_m = Some(Vec::new());
+    let e = scene.output_point_count().expect_err("no points");
+    assert_eq!(e.field, "output.s_m");
+    scene.output.s_m = Some(vec![0.1]);
+    assert_eq!(scene.output_point_count().ok(), Some(1));
 }

@@ -39,6 +39,10 @@ pub use locate::locate;
 /// well within memory.
 pub const MAX_OUTPUT_POINTS: usize = 100_000;
 
+/// The loosest `[solver] tolerance` a scene may set (the dimensionless tip-moment residual; the
+/// tip may be off by about half of it times the rod's length). Above a millionth it is warned about.
+pub const MAX_SOLVER_TOLERANCE: f64 = 1e-3;
+
 /// Most RK4 steps in one sweep, summed over the sections' `steps`. A solve takes up to several hundred
 /// sweeps (426 for a load continuation that fails on the 3D bench), at about 0.4 us a step on a
 /// desktop: this many steps keep the worst solve within seconds (a scene of 8 sections x 65 535 steps
@@ -1134,6 +1138,11 @@ impl Scene {
                     s.len()
                 ),
             )),
+            // (A CSV of no rows would not even say the status.)
+            Some(s) if s.is_empty() => Err(SceneError::new(
+                "output.s_m",
+                "no arc lengths: at least one (or leave it out for `points`)",
+            )),
             Some(s) => Ok(s.len()),
             None => self.output.points.checked(
                 "output.points",
@@ -1179,6 +1188,19 @@ impl Scene {
                 return Err(SceneError::new(
                     "solver.tolerance",
                     "must be a positive number",
+                ));
+            }
+            // The residual is the tip moment's error in bending scales: the tip may be off by
+            // about half the tolerance times the rod's length, and above a thousandth a
+            // "converged" answer is no answer (at 1.0 the bench's tip was 11 mm off, converged in
+            // no iteration).
+            if tolerance > MAX_SOLVER_TOLERANCE {
+                return Err(SceneError::new(
+                    "solver.tolerance",
+                    format!(
+                        "{tolerance} is above {MAX_SOLVER_TOLERANCE}: the tip may be off by about \
+                         half of it times the rod's length (the default is about 1e-11 in f64)"
+                    ),
                 ));
             }
             settings.tolerance = tolerance;

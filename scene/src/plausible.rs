@@ -29,6 +29,8 @@ const GUIDE_MASS_KG: f64 = 1.0;
 const GUIDE_THICKNESS_M: f64 = 0.05;
 /// Largest plausible gravity, m/s^2 (ten times the Earth's).
 const GRAVITY_M_S2: f64 = 100.0;
+/// A `[solver] tolerance` above this is warned about (up to `MAX_SOLVER_TOLERANCE`, refused above).
+const LOOSE_TOLERANCE: f64 = 1e-6;
 /// Spool radii a cable drive has, m: 0.5 mm to 10 cm.
 const SPOOL_RADIUS_M: (f64, f64) = (5e-4, 0.1);
 
@@ -272,6 +274,19 @@ impl Scene {
                     "{a} degrees, and every hole angle of the scene is within one turn in \
                      radians (the unit is degrees). Did you mean {:.4} degrees ({a} rad)?",
                     a.to_degrees()
+                ),
+            );
+        }
+        if let Some(tolerance) = self
+            .solver
+            .tolerance
+            .filter(|t| *t > LOOSE_TOLERANCE && *t <= crate::MAX_SOLVER_TOLERANCE)
+        {
+            warn(
+                "solver.tolerance".into(),
+                format!(
+                    "{tolerance} is a loose tolerance: the tip may be off by about half of it times \
+                     the rod's length (the default is about 1e-11 in f64)"
                 ),
             );
         }

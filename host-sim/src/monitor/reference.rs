@@ -3,14 +3,16 @@
 //! `robot` image applies), written in the columns `--check-against` reads (`check.rs`).
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use model_core::{Model, ShapePoint, Start, TipLoad};
+use model_core::{Attitude, Model, ShapePoint, ShootingSettings, Start, TipLoad};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 use super::table::Table;
-use crate::scene::{Scene, SceneError};
+use crate::run::WithModel;
+use crate::scene::{MAX_OUTPUT_POINTS, Scene, SceneError};
 
 /// The command line of `host-sim reference`.
 #[derive(Debug, Clone, clap::Args)]
@@ -70,77 +72,114 @@ pub fn reference_csv(
     path: &[AppliedForce],
     backbone_points: usize,
 ) -> Result<String, SceneError> {
-    if backbone_points == 0 {
-        return Err(SceneError::new("--backbone-points", "at least 1"));
+    if !(1..=MAX_OUTPUT_POINTS).contains(&backbone_points) {
+        return Err(SceneError::new(
+            "--backbone-points",
+            format!("1 to {MAX_OUTPUT_POINTS}"),
+        ));
     }
-    let model = Model::<f64>::new(scene.rod()?)
-        .map_err(|e| SceneError::new("scene", format!("the model refuses it: {e:?}")))?;
-    let settings = scene.shooting_settings()?;
-    let length_m = model.length_m();
-    let s_m: Vec<f64> = (1..=backbone_points)
-        .map(|i| length_m * i as f64 / backbone_points as f64)
-        .collect();
-    let mut out = String::new();
-    let w = |e: std::fmt::Error| SceneError::new("reference", e.to_string());
-    writeln!(
-        out,
-        "# The f64 reference of a load path: host-sim reference of the scene \"{}\" (forward solves \
-         at each tick's tip force); backbone_<i>_*: the backbone at arc lengths {} m.",
-        scene.name,
-        s_m.iter()
-            .map(|s| format!("{s}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+    // A tendon robot's reference would need each tick's actuation, which a load path of tip
+    // forces does not give: solving its rod without the tendons would be another robot's.
+    if !scene.tendons.is_empty() || scene.actuation.is_some() {
+        return Err(SceneError::new(
+            "scene",
+            "it has tendons: `reference` solves a load path of tip forces on a robot whose cables \
+             only measure, and a tendon robot's needs its actuation at every tick",
+        ));
+    }
+    crate::run::with_model(
+        scene,
+        Reference {
+            name: &scene.name,
+            settings: scene.shooting_settings()?,
+            path,
+            backbone_points,
+        },
     )
-    .map_err(w)?;
-    let mut header = String::from(
-        "tick,expected,force_x_n,force_y_n,force_z_n,tip_x_m,tip_y_m,tip_z_m,tip_qw,tip_qx,tip_qy,\
-         tip_qz",
-    );
-    for i in 0..backbone_points {
-        for axis in ["x", "y", "z"] {
-            write!(header, ",backbone_{i}_{axis}_m").map_err(w)?;
+}
+
+/// The reference's solves, on the model in the scene's frame representation.
+struct Reference<'a> {
+    name: &'a str,
+    settings: ShootingSettings<f64>,
+    path: &'a [AppliedForce],
+    backbone_points: usize,
+}
+
+impl WithModel for Reference<'_> {
+    type Output = String;
+
+    fn run<A: Attitude<f64>>(self, model: &Model<f64, A>) -> Result<String, SceneError> {
+        let Reference {
+            name,
+            settings,
+            path,
+            backbone_points,
+        } = self;
+        let length_m = model.length_m();
+        let s_m: Vec<f64> = (1..=backbone_points)
+            .map(|i| length_m * i as f64 / backbone_points as f64)
+            .collect();
+        let mut out = String::new();
+        let w = |e: std::fmt::Error| SceneError::new("reference", e.to_string());
+        writeln!(
+            out,
+            "# The f64 reference of a load path: host-sim reference of the scene \"{}\" (forward \
+             solves at each tick's tip force); backbone_<i>_*: the backbone at arc lengths {} m.",
+            name,
+            s_m.iter()
+                .map(|s| format!("{s}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+        .map_err(w)?;
+        let mut header = String::from(
+            "tick,expected,force_x_n,force_y_n,force_z_n,tip_x_m,tip_y_m,tip_z_m,tip_qw,tip_qx,\
+             tip_qy,tip_qz",
+        );
+        for i in 0..backbone_points {
+            for axis in ["x", "y", "z"] {
+                write!(header, ",backbone_{i}_{axis}_m").map_err(w)?;
+            }
         }
-    }
-    writeln!(out, "{header}").map_err(w)?;
-    let mut start = Start::Cold;
-    let mut points = vec![ShapePoint::default(); backbone_points];
-    for applied in path {
-        let eq = model
-            .solve(&TipLoad::force(applied.force_n), start, &settings)
-            .map_err(|e| SceneError::new(format!("tick {}", applied.tick), format!("{e:?}")))?;
-        if !eq.report.termination.is_success() || !eq.report.stability.is_acceptable() {
-            return Err(SceneError::new(
-                format!("tick {}", applied.tick),
-                format!(
+        writeln!(out, "{header}").map_err(w)?;
+        let mut start = Start::Cold;
+        let mut points = vec![ShapePoint::default(); backbone_points];
+        for applied in path {
+            let at_tick = |e: String| SceneError::new(format!("tick {}", applied.tick), e);
+            let eq = model
+                .solve(&TipLoad::force(applied.force_n), start, &settings)
+                .map_err(|e| at_tick(format!("{e:?}")))?;
+            if !eq.report.termination.is_success() || !eq.report.stability.is_acceptable() {
+                return Err(at_tick(format!(
                     "the solve ended {:?} ({:?}): no reference",
                     eq.report.termination, eq.report.stability
-                ),
+                )));
+            }
+            start = eq.next_start();
+            model
+                .shape(&eq, &s_m, &mut points)
+                .map_err(|e| at_tick(format!("{e:?}")))?;
+            let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                eq.tip_rotation,
             ));
+            let sign = if q.w < 0.0 { -1.0 } else { 1.0 };
+            let (f, tip) = (applied.force_n, eq.tip_position_m);
+            let mut row = format!(
+                "{},fresh,{:?},{:?},{:?},{:?},{:?},{:?}",
+                applied.tick, f.x, f.y, f.z, tip.x, tip.y, tip.z
+            );
+            for c in [q.w, q.i, q.j, q.k] {
+                write!(row, ",{:?}", sign * c).map_err(w)?;
+            }
+            for p in &points {
+                let p = p.position_m;
+                write!(row, ",{:?},{:?},{:?}", p.x, p.y, p.z).map_err(w)?;
+            }
+            writeln!(out, "{row}").map_err(w)?;
         }
-        start = eq.next_start();
-        model
-            .shape(&eq, &s_m, &mut points)
-            .map_err(|e| SceneError::new(format!("tick {}", applied.tick), format!("{e:?}")))?;
-        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
-            eq.tip_rotation,
-        ));
-        let sign = if q.w < 0.0 { -1.0 } else { 1.0 };
-        let (f, tip) = (applied.force_n, eq.tip_position_m);
-        let mut row = format!(
-            "{},fresh,{:?},{:?},{:?},{:?},{:?},{:?}",
-            applied.tick, f.x, f.y, f.z, tip.x, tip.y, tip.z
-        );
-        for c in [q.w, q.i, q.j, q.k] {
-            write!(row, ",{:?}", sign * c).map_err(w)?;
-        }
-        for p in &points {
-            let p = p.position_m;
-            write!(row, ",{:?},{:?},{:?}", p.x, p.y, p.z).map_err(w)?;
-        }
-        writeln!(out, "{row}").map_err(w)?;
+        Ok(out)
     }
-    Ok(out)
 }
 
 /// `host-sim reference`: exit 0 with the reference written, 1 for invalid input or a tick without
@@ -159,10 +198,11 @@ pub fn main(args: &Args) -> ExitCode {
         match &args.out {
             Some(out) => std::fs::write(out, csv)
                 .map_err(|e| SceneError::new(out.display().to_string(), e.to_string())),
-            None => {
-                print!("{csv}");
-                Ok(())
-            }
+            // Not `print!`, which panics when the reader has gone (a closed pipe).
+            None => std::io::stdout()
+                .lock()
+                .write_all(csv.as_bytes())
+                .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}"))),
         }
     };
     match run() {

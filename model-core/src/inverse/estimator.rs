@@ -100,7 +100,8 @@ pub struct Estimator<'a, T: Scalar, A: Attitude<T>, const P: usize, const NODES:
     lin: Linearization<T, P>,
     stability: Stability<T>,
     /// The first estimate's verdict when it could not rule out other answers
-    /// ([`Determination::Ambiguous`] or [`Determination::Unverified`]): every update inherits it.
+    /// ([`Determination::Ambiguous`], or [`Determination::Unverified`], which includes a first
+    /// estimate that did not converge and so was never searched around): every update inherits it.
     /// An update follows one branch from the last estimate and does not look for others, so it
     /// cannot lift the doubt; a new cold start can.
     doubt: Option<Determination>,
@@ -187,7 +188,10 @@ where
             },
             lin: Linearization::empty(),
             stability: first.report.stability,
+            // A first estimate that did not converge was never searched around, whatever its
+            // verdict (an unconverged fit can read `Inconsistent` and its updates then converge).
             doubt: match first.quality.determination {
+                _ if !first.report.termination.is_success() => Some(Determination::Unverified),
                 d @ (Determination::Ambiguous | Determination::Unverified) => Some(d),
                 _ => None,
             },

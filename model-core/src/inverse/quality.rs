@@ -29,8 +29,8 @@ pub enum Determination {
     /// the prior prefers, and the data alone cannot tell.
     Ambiguous,
     /// The search for other answers ran out of its sweep budget
-    /// ([`crate::inverse::InverseSettings::max_sweeps`]) before it could rule them out: the answer
-    /// may be one of several.
+    /// ([`crate::inverse::InverseSettings::max_sweeps`]) before it could rule them out, or never
+    /// ran (a cold estimate that did not converge): the answer may be one of several.
     Unverified,
 }
 

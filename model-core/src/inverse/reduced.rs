@@ -588,9 +588,15 @@ where
     ///    ([`Determination::Ambiguous`]) instead of calling either answer determined, and when the
     ///    budget runs out before the search is done, that too ([`Determination::Unverified`]).
     pub(super) fn solve(&self, mut x: Point<T, P>, mut work: Work) -> Estimate<T, P> {
+        // An estimate that did not converge was never searched around: unverified at best.
+        let unsearched = |mut out: Estimate<T, P>| {
+            out.quality.determination =
+                out.quality.determination.at_best(Determination::Unverified);
+            out
+        };
         let Some(mut lin) = self.linearize_at(&x, &mut work) else {
             let lin = Linearization::empty();
-            return self.finish(x, &lin, Termination::NonFinite, work);
+            return unsearched(self.finish(x, &lin, Termination::NonFinite, work));
         };
         // The scan's sweeps are kept out of the budget of the solve itself.
         let budget = self.settings.max_sweeps.saturating_sub(SCAN_SWEEPS);
@@ -599,7 +605,7 @@ where
             Err(stopped) => stopped,
         };
         if !termination.is_success() {
-            return self.finish(x, &lin, termination, work);
+            return unsearched(self.finish(x, &lin, termination, work));
         }
         let limit = self.settings.max_sweeps;
         let (scan, widen) = match self.alternatives(&x, &lin, limit, &mut work) {

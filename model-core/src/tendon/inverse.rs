@@ -855,6 +855,11 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Model<T, A, NODES> {
             }
         }
         if !best.is_success() {
+            // Never searched around: unverified at best.
+            best.quality.determination = best
+                .quality
+                .determination
+                .at_best(Determination::Unverified);
             best.sweeps = problem.sweeps;
             return Ok(best);
         }
