@@ -880,6 +880,12 @@ fn main() -> ExitCode {
                 let _ = error.print();
                 return Ok(exit::USAGE);
             };
+            if scene.cables.is_empty() {
+                return Err(SceneError::new(
+                    "--cables",
+                    "the scene has no [[cable]] (and no [[tendon]]): nothing measures its shape",
+                ));
+            }
             let estimate = with_model(
                 &scene,
                 Estimate {

@@ -957,3 +957,24 @@ fn output_that_cannot_be_written_and_a_tip_force_that_is_no_number_are_errors() 
     assert_eq!(code(&out), 2, "{}", stderr(&out));
     assert!(stderr(&out).contains("finite"), "{}", stderr(&out));
 }
+
+/// A scene with neither cables nor tendons has nothing to estimate from, and says so (it said the
+/// measured lengths and the cables "do not match in size").
+#[test]
+fn estimate_on_a_scene_without_cables_says_so() {
+    let text = std::fs::read_to_string(scene("bench_3d_cables.toml")).expect("reads");
+    let mut kept = Vec::new();
+    let mut in_cable = false;
+    for line in text.lines() {
+        if line.starts_with('[') {
+            in_cable = line == "[[cable]]";
+        }
+        if !in_cable {
+            kept.push(line);
+        }
+    }
+    let path = write_scene("no-cables", &kept.join("\n"));
+    let out = host_sim(&["estimate", &path, "--cables", "0.3,0.3,0.3"]);
+    assert_eq!(code(&out), 1, "{}", stderr(&out));
+    assert!(stderr(&out).contains("no [[cable]]"), "{}", stderr(&out));
+}
