@@ -271,7 +271,7 @@ where
             };
             if !eq.report.termination.is_success() {
                 let lin = problem.linearize(&problem.full_sweep(&x));
-                return Ok(problem.finish(x, &lin, eq.report.termination, work));
+                return Ok(problem.finish_unsearched(x, &lin, eq.report.termination, work));
             }
             x
         }

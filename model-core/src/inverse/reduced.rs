@@ -588,15 +588,9 @@ where
     ///    ([`Determination::Ambiguous`]) instead of calling either answer determined, and when the
     ///    budget runs out before the search is done, that too ([`Determination::Unverified`]).
     pub(super) fn solve(&self, mut x: Point<T, P>, mut work: Work) -> Estimate<T, P> {
-        // An estimate that did not converge was never searched around: unverified at best.
-        let unsearched = |mut out: Estimate<T, P>| {
-            out.quality.determination =
-                out.quality.determination.at_best(Determination::Unverified);
-            out
-        };
         let Some(mut lin) = self.linearize_at(&x, &mut work) else {
             let lin = Linearization::empty();
-            return unsearched(self.finish(x, &lin, Termination::NonFinite, work));
+            return self.finish_unsearched(x, &lin, Termination::NonFinite, work);
         };
         // The scan's sweeps are kept out of the budget of the solve itself.
         let budget = self.settings.max_sweeps.saturating_sub(SCAN_SWEEPS);
@@ -605,7 +599,7 @@ where
             Err(stopped) => stopped,
         };
         if !termination.is_success() {
-            return unsearched(self.finish(x, &lin, termination, work));
+            return self.finish_unsearched(x, &lin, termination, work);
         }
         let limit = self.settings.max_sweeps;
         let (scan, widen) = match self.alternatives(&x, &lin, limit, &mut work) {
@@ -1114,6 +1108,20 @@ where
         work: Work,
     ) -> Estimate<T, P> {
         self.finish_widened(x, lin, termination, work, None)
+    }
+
+    /// [`Problem::finish`] of a solve that did not converge and so never searched for other
+    /// answers: its verdict is [`Determination::Unverified`] at best.
+    pub(super) fn finish_unsearched(
+        &self,
+        x: Point<T, P>,
+        lin: &Linearization<T, P>,
+        termination: Termination,
+        work: Work,
+    ) -> Estimate<T, P> {
+        let mut out = self.finish_widened(x, lin, termination, work, None);
+        out.quality.determination = out.quality.determination.at_best(Determination::Unverified);
+        out
     }
 
     /// [`Problem::finish`], with the posterior widened along a direction where the profile showed
