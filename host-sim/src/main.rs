@@ -1,13 +1,14 @@
 //! `host-sim`: run the thesis's experiments and your own scenes through the model in f64.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 use host_sim::plots::{Figure, PlotSize};
-use host_sim::run::{self, Estimate, Solve, Status, TendonInverse, TendonSolve, exit, with_model};
+use host_sim::run::{
+    self, Estimate, Solve, Status, TendonInverse, TendonSolve, emit, exit, with_model,
+};
 use host_sim::scene::{self, Actuation, Control, Scene, SceneError, TensionArgs};
 use host_sim::{calibrate, report, thesis};
 use nalgebra::Vector3;
@@ -264,18 +265,6 @@ fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
 fn fail(e: &dyn std::fmt::Display) -> ExitCode {
     eprintln!("error: {e}");
     ExitCode::from(exit::INVALID_INPUT)
-}
-
-fn emit(text: &str, out: Option<&PathBuf>) -> Result<(), SceneError> {
-    match out {
-        Some(path) => std::fs::write(path, text)
-            .map_err(|e| SceneError::new(path.display().to_string(), format!("cannot write: {e}"))),
-        // Not `print!`, which panics when the reader has gone (a closed pipe).
-        None => std::io::stdout()
-            .lock()
-            .write_all(text.as_bytes())
-            .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}"))),
-    }
 }
 
 fn json<T: serde::Serialize>(value: &T) -> Result<String, SceneError> {
@@ -650,7 +639,7 @@ fn estimate_tendons(
         Format::Json => json(&estimate)?,
         Format::Csv => run::tendon_estimate_csv(&estimate),
     };
-    emit(&text, out.as_ref())?;
+    emit(&text, out.as_deref())?;
     draw_plot(plot.as_ref(), plot_size, estimate.figure.as_ref())?;
     Ok(estimate.status.exit_code)
 }
@@ -811,7 +800,7 @@ fn main() -> ExitCode {
                 Format::Json => json(&solution)?,
                 Format::Csv => run::solution_csv(&solution),
             };
-            emit(&text, out.as_ref())?;
+            emit(&text, out.as_deref())?;
             draw_plot(plot.as_ref(), plot_size, solution.figure.as_ref())?;
             Ok(solution.status.exit_code)
         })(),
@@ -901,7 +890,7 @@ fn main() -> ExitCode {
                 Format::Json => json(&estimate)?,
                 Format::Csv => run::shape_csv(shape, &estimate.status),
             };
-            emit(&text, out.as_ref())?;
+            emit(&text, out.as_deref())?;
             draw_plot(plot.as_ref(), plot_size, estimate.figure.as_ref())?;
             Ok(estimate.status.exit_code)
         })(),

@@ -10,6 +10,8 @@
 //! `"Infinity"` or `"-Infinity"`. (A solve that ended in `NonFinite` has a NaN residual.)
 
 use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
 
 use model_core::inverse::{
     Determination, EstimatorSettings, InverseSettings, InverseStart, LoadBasis, estimate,
@@ -54,6 +56,19 @@ pub fn with_model<W: WithModel>(scene: &Scene, work: W) -> Result<W::Output, Sce
             work.run(&Model::<f64, RotationMatrix<f64>>::new(rod).map_err(err)?)
         }
         AttitudeChoice::LieGroup => work.run(&Model::<f64, LieGroup<f64>>::new(rod).map_err(err)?),
+    }
+}
+
+/// Writes a command's output to the file `out`, or to standard output. Not `print!`, which panics
+/// when the reader has gone (a closed pipe, a full disk): an I/O error, exit 1.
+pub fn emit(text: &str, out: Option<&Path>) -> Result<(), SceneError> {
+    match out {
+        Some(path) => std::fs::write(path, text)
+            .map_err(|e| SceneError::new(path.display().to_string(), format!("cannot write: {e}"))),
+        None => std::io::stdout()
+            .lock()
+            .write_all(text.as_bytes())
+            .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}"))),
     }
 }
 

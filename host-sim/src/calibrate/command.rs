@@ -1,7 +1,6 @@
 //! `host-sim calibrate <scene.toml> --data <measurements.csv>`: read both files, fit, write the
 //! calibrated scene (`--out`, only for a determined fit) and print the report (text or JSON).
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use clap::ValueEnum;
@@ -147,10 +146,6 @@ pub fn run(args: &Args) -> Result<u8, SceneError> {
             .map(|s| s + "\n")
             .map_err(|e| SceneError::new("output", e.to_string()))?,
     };
-    // Not `print!`, which panics when the reader has gone (a closed pipe).
-    std::io::stdout()
-        .lock()
-        .write_all(report.as_bytes())
-        .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}")))?;
+    crate::run::emit(&report, None)?;
     Ok(c.status.exit_code)
 }

@@ -3,7 +3,6 @@
 //! `robot` image applies), written in the columns `--check-against` reads (`check.rs`).
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -195,15 +194,7 @@ pub fn main(args: &Args) -> ExitCode {
             .map_err(|e| SceneError::new(&forces_origin, e.to_string()))?;
         let path = parse_forces(&forces, &forces_origin)?;
         let csv = reference_csv(&scene, &path, args.backbone_points)?;
-        match &args.out {
-            Some(out) => std::fs::write(out, csv)
-                .map_err(|e| SceneError::new(out.display().to_string(), e.to_string())),
-            // Not `print!`, which panics when the reader has gone (a closed pipe).
-            None => std::io::stdout()
-                .lock()
-                .write_all(csv.as_bytes())
-                .map_err(|e| SceneError::new("standard output", format!("cannot write: {e}"))),
-        }
+        crate::run::emit(&csv, args.out.as_deref())
     };
     match run() {
         Ok(()) => ExitCode::SUCCESS,

@@ -95,6 +95,12 @@ pub fn converged_ratio(cost: fn(&Row) -> f64) -> impl Fn(&Row, &Row) -> Option<f
     move |a, b| (a.converged() && b.converged()).then(|| cost(a) / cost(b))
 }
 
+/// The spread of `cost` of family `a` against `b` over their pairs where both converged (any step
+/// count), as a report shows it ("n/a" without a pair).
+pub fn converged_ratio_text(rows: &[Row], a: &Family, b: &Family, cost: fn(&Row) -> f64) -> String {
+    Spread::of(&paired(rows, a, b, 0, converged_ratio(cost))).map_or("n/a".into(), |s| s.ratio())
+}
+
 /// The host time of one solve against another's, where both converged ([`converged_ratio`]).
 fn time_ratio(a: &Row, b: &Row) -> Option<f64> {
     converged_ratio(|r| r.host_time_us)(a, b)
@@ -300,8 +306,7 @@ fn kirchhoff(study: &Study) -> String {
     } else {
         ""
     };
-    let time = Spread::of(&paired(&study.rows, &k, &Family::REFERENCE, 0, time_ratio))
-        .map_or("n/a".into(), |s| s.ratio());
+    let time = converged_ratio_text(&study.rows, &k, &Family::REFERENCE, |r| r.host_time_us);
     format!(
         "**Kirchhoff** (inextensible, unshearable) stops improving at {}: its modelling \
          error{enough}. Its time per solve is {time} the Cosserat model's.",
@@ -384,14 +389,7 @@ fn f32_floor(study: &Study) -> String {
             ))
         })
         .collect();
-    let time = Spread::of(&paired(
-        &study.rows,
-        &q32,
-        &Family::REFERENCE,
-        0,
-        time_ratio,
-    ))
-    .map_or("n/a".into(), |s| s.ratio());
+    let time = converged_ratio_text(&study.rows, &q32, &Family::REFERENCE, |r| r.host_time_us);
     let sweeps =
         |f: &Family, other: &Family| median_sweeps(&study.rows, f, other).unwrap_or(f64::NAN);
     format!(

@@ -3,7 +3,7 @@
 
 use model_core::reduction::TendonModel;
 
-use super::super::findings::{Spread, converged_ratio, join, paired};
+use super::super::findings::{Spread, converged_ratio_text, join};
 use super::super::measure::Row;
 use super::super::numbers::{sig, us};
 use super::super::variants::{Arithmetic, Family, Reduction};
@@ -159,22 +159,8 @@ fn continuous_paragraph(study: &TendonStudy) -> String {
             None => format!("none of the tolerances on {key}"),
         });
     }
-    let time = Spread::of(&paired(
-        &study.rows,
-        &c,
-        &d,
-        0,
-        converged_ratio(|r| r.host_time_us),
-    ))
-    .map_or("n/a".into(), |s| s.ratio());
-    let sweeps = Spread::of(&paired(
-        &study.rows,
-        &c,
-        &d,
-        0,
-        converged_ratio(|r| r.sweeps_per_solve),
-    ))
-    .map_or("n/a".into(), |s| s.ratio());
+    let time = converged_ratio_text(&study.rows, &c, &d, |r| r.host_time_us);
+    let sweeps = converged_ratio_text(&study.rows, &c, &d, |r| r.sweeps_per_solve);
     format!(
         "**Continuous routing** (Rucker & Webster) stops improving at {}: the routing's modelling \
          error (the tendon follows the backbone instead of running in chords between guides; the \
@@ -224,22 +210,12 @@ fn f32_paragraph(study: &TendonStudy) -> String {
             .unwrap_or_default();
         parts.push(format!("{} um on {key}{refused}", um(best)));
     }
-    let time = Spread::of(&paired(
-        &study.rows,
-        &f,
-        &discrete(Arithmetic::F64),
-        0,
-        converged_ratio(|r| r.host_time_us),
-    ))
-    .map_or("n/a".into(), |s| s.ratio());
-    let sweeps = Spread::of(&paired(
-        &study.rows,
-        &f,
-        &discrete(Arithmetic::F64),
-        0,
-        converged_ratio(|r| r.sweeps_per_solve),
-    ))
-    .map_or("n/a".into(), |s| s.ratio());
+    let time = converged_ratio_text(&study.rows, &f, &discrete(Arithmetic::F64), |r| {
+        r.host_time_us
+    });
+    let sweeps = converged_ratio_text(&study.rows, &f, &discrete(Arithmetic::F64), |r| {
+        r.sweeps_per_solve
+    });
     format!(
         "**f32 discrete guides** bottom out at {} (best over the step counts); on the host they take \
          {time} f64's time and {sweeps} its sweeps per cold solve at equal steps.",
