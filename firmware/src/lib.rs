@@ -9,6 +9,7 @@
 //! | angle sensors, AS5047P driver, turn placement | [`encoder`] |
 //! | the 1 kHz sampler: turn tracking, stepper cross-check, named cable faults | [`sampler`] |
 //! | stepper microsteps <-> sensor counts | [`stepper`] |
+//! | why the MCU last started (reset flags), and whether home is known | [`reset`] |
 //! | spool calibration (counts <-> metres) | [`spool`] |
 //! | reading validation (typed rejections) | [`validate`] |
 //! | the estimator loop and its output records | [`control`] |
@@ -30,6 +31,7 @@ pub mod encoder;
 pub mod fixture;
 #[cfg(any(test, feature = "link"))]
 pub mod link;
+pub mod reset;
 pub mod robot_check;
 pub mod sampler;
 pub mod spool;

@@ -12,6 +12,7 @@
 //! | fault | evidence |
 //! | --- | --- |
 //! | [`CableFault::PowerUpOffHome`] | the first readings after power-up sit the same distance (beyond the tolerance) from home, where the stepper starts |
+//! | [`CableFault::HomeUnknown`] | the MCU started from a reset other than a power-up ([`crate::reset`]): the cables may be anywhere, whole sensor turns from home included ([`Sampler::distrust_home`]) |
 //! | [`CableFault::StuckSensor`] | refused, and the angle has not moved while the stepper moved by more than the tolerance (a dead sensor, a frozen bus, or a stalled motor: the two look alike) |
 //! | [`CableFault::TurnAliasing`] | refused with a steady offset of whole sensor turns: the turn count and the stepper disagree |
 //! | [`CableFault::SlippedMagnet`] | refused with a steady offset that is not whole turns (a magnet slipped on its shaft, or the motor lost steps once) |
@@ -53,6 +54,10 @@ pub enum CableFault {
         /// Sensor minus stepper, counts, in `[-turn/2, turn/2)`.
         offset_counts: i32,
     },
+    /// The MCU started from a reset other than a power-up (the firmware's own after a fault, a
+    /// watchdog, the reset pin, a brownout): the motors may have left home, and a cable a whole
+    /// number of sensor turns from home reads like home. Set by [`Sampler::distrust_home`].
+    HomeUnknown,
     /// The angle stayed put while the stepper moved: a dead sensor or bus, or a stalled motor.
     StuckSensor {
         /// The angle it is stuck at, counts.
@@ -241,6 +246,16 @@ impl<S: AngleSensor> Sampler<S> {
     pub fn rehome(&mut self) {
         for channel in &mut self.channels {
             channel.mode = Mode::Adopt;
+            channel.streak = Streak::default();
+        }
+    }
+
+    /// The cables may not be at home (the MCU started from a reset other than a power-up,
+    /// [`crate::reset::ResetCause::home_is_known`]): every cable latches
+    /// [`CableFault::HomeUnknown`] and gives no length until [`Sampler::rehome`].
+    pub fn distrust_home(&mut self) {
+        for channel in &mut self.channels {
+            channel.mode = Mode::Faulted(CableFault::HomeUnknown);
             channel.streak = Streak::default();
         }
     }

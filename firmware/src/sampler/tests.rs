@@ -376,6 +376,36 @@ fn rehoming_takes_the_angle_at_home_and_clears_the_fault() {
 }
 
 #[test]
+fn after_a_reset_that_was_no_power_up_no_cable_is_taken_to_be_at_home() {
+    // The case power-up cannot see (above): cable 1 a whole sensor turn from home, cable 2 at
+    // home. After a reset the board reads as no power-up, every cable latches `HomeUnknown` and
+    // gives no length, the one at home too (nothing tells them apart); re-homed at home, each is
+    // tracked again.
+    let mut w = World::at_home();
+    w.shaft[1] += TURN;
+    let (world, mut sampler) = rig(w);
+    sampler.distrust_home();
+    for _ in 0..3 * MAX_REFUSED_SAMPLES {
+        let s = sample(&world, &mut sampler);
+        assert_eq!(
+            s.readings,
+            [Err(SampleError::Fault(CableFault::HomeUnknown)); 3]
+        );
+    }
+    assert_eq!(sampler.faults(), [Some(CableFault::HomeUnknown); 3]);
+    assert_eq!(sampler.positions_counts(), [None; 3]);
+    // Driven home and re-homed there: tracked from home, stepper and sensor agreeing.
+    world.borrow_mut().shaft[1] -= TURN;
+    sampler.rehome();
+    assert_true_lengths(&sample(&world, &mut sampler), &world);
+    for _ in 0..100 {
+        world.borrow_mut().drive(1, 150);
+        assert_true_lengths(&sample(&world, &mut sampler), &world);
+    }
+    assert_eq!(sampler.faults(), [None; 3]);
+}
+
+#[test]
 fn lengths_follow_a_geared_spool_across_a_wrap() {
     // Home at 16380 on cable 0 (paid out with counts): +10 counts wraps the angle to 6.
     let (world, mut sampler) = rig(World::at_home());

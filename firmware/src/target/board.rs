@@ -18,7 +18,9 @@
 //! Failure never hangs silently: a panic logs its message over defmt (panic-probe) and ends in a
 //! HardFault (`udf`); a HardFault logs over defmt (an overflowed stack as such, see
 //! [`crate::hard_fault_entry`]), then stops at a breakpoint when a debugger is attached (probe-rs
-//! prints the backtrace) and resets the MCU otherwise.
+//! prints the backtrace) and resets the MCU otherwise. After that reset (or any but a power-up:
+//! [`crate::reset`]) the sampler does not take the cables to be at home: every cable is faulted
+//! (`HomeUnknown`) until re-homed, which on this board means powering up at home.
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicI32, Ordering};
@@ -39,6 +41,7 @@ use crate::control::{EstimatorLoop, Status};
 use crate::encoder::AngleSensor;
 use crate::encoder::as5047p::{self, As5047p};
 use crate::link::{self, RecordWriter};
+use crate::reset::ResetCause;
 use crate::sampler::{Sample, SampleError, Sampler};
 
 /// The sensors' shared bus.
@@ -105,6 +108,10 @@ pub fn init(
     dcb: &mut DCB,
     dwt: &mut DWT,
 ) -> (Sampler<BoardSensor>, LinkPort) {
+    // Why the MCU started, read before the clocks are set up; the flags are cleared so that the
+    // next start sees its own cause alone.
+    let reset = ResetCause::from_csr(dp.RCC.csr().read().bits());
+    dp.RCC.csr().modify(|_, w| w.rmvf().clear());
     let mut rcc = dp.RCC.freeze(Config::hse(8.MHz()).sysclk(SYSCLK_HZ.Hz()));
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
@@ -144,13 +151,22 @@ pub fn init(
         defmt::error!("encoder setup refused");
         stop()
     };
-    let sampler = match crate::config::sampler([a, b, c]) {
+    let mut sampler = match crate::config::sampler([a, b, c]) {
         Ok(sampler) => sampler,
         Err(e) => {
             defmt::error!("sampler refused: {}", e);
             stop()
         }
     };
+    if !reset.home_is_known() {
+        // The motors may have left home since the power came up (the firmware's own reset after
+        // a fault, a watchdog, the reset pin): no cable gives a length until re-homed.
+        defmt::warn!(
+            "reset: {}: home unknown, every cable faulted until re-homed",
+            reset
+        );
+        sampler.distrust_home();
+    }
     dcb.enable_trace();
     dwt.enable_cycle_counter();
     tasks::start_sampling(syst, SYSCLK_HZ, SAMPLE_RATE_HZ);
