@@ -9,7 +9,7 @@
 //! also gives the tip's distance from the default tolerance's answer. `WARM=1` adds two lines per
 //! mass: the solve warm from the answer at a 1 % lighter mass, from its base strain
 //! (`Start::Warm`) and from the neighbour (`Equilibrium::next_start`). `PLANAR=1` adds one line per
-//! mass: the planar reduction's cold solve (`PlanarModel`, with its 3D stability sweep), its tip
+//! mass: the planar reduction's cold solve (`PlanarModel`, with its stability sweep out of the plane), its tip
 //! compared, as every line's, with the 3D solve's at the default tolerance.
 
 use std::time::Instant;

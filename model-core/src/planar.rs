@@ -5,8 +5,10 @@
 //! continuation are the 3D solve's own (`sweep/`, `solve/`).
 //!
 //! The stability test during the solve is the in-plane one (`d theta / d k(0) > 0` along the rod and
-//! a positive free-end stiffness); the answer then gets the 3D test (one 3D sweep with its Jacobi
-//! fields), since an instability out of the plane is invisible to the reduction.
+//! a positive free-end stiffness); the answer then gets the test out of the plane, since an
+//! instability there is invisible to the reduction: one sweep of the planar state with the two
+//! Jacobi fields that leave the plane (`ode/planar_lateral.rs`). The 3D fields of a planar
+//! equilibrium split into the two blocks, so the two tests together are the 3D test.
 
 use nalgebra::SVector;
 
@@ -14,13 +16,14 @@ use crate::error::{ModelError, finite_vec};
 use crate::kinematics::Attitude;
 use crate::loads::TipLoad;
 use crate::model::Model;
-use crate::ode::dead_load::DeadLoadRod;
 pub use crate::ode::planar::Plane;
 use crate::ode::planar::{PlanarRod, PlanarSection};
+use crate::ode::planar_lateral::LateralRod;
 use crate::plan::MAX_NODES;
 use crate::report::Termination;
 use crate::shape::ShapePoint;
 use crate::shooting::{Equilibrium, ShootingSettings, equilibrium, shape_of};
+use crate::stability;
 use crate::sweep::{TangentSet, sweep};
 use crate::{MAX_SECTIONS, Scalar};
 
@@ -145,13 +148,19 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarModel<'a, T, A, NO
             && solved.newton.termination.is_success()
             && settings.check_stability
         {
-            // Out of the plane (bending across it with twist: lateral buckling) the reduction sees
-            // nothing, so the answer gets the 3D test: one sweep with the Jacobi fields.
+            // Out of the plane (bending across it with twist: lateral buckling) the in-plane test
+            // sees nothing, so the answer gets the 3D test's other block: one sweep of the planar
+            // state with the two Jacobi fields that leave the plane (`ode/planar_lateral.rs`).
             solved.work.sweep();
-            let full = DeadLoadRod::new(model, load, T::one());
-            let u0 = normal * solved.newton.x.x;
-            let swept = sweep(&full, &u0, TangentSet::unknowns(true), None);
-            solved.stability = crate::solve::verdict(&full, &swept);
+            let lateral = LateralRod::new(ode, solved.newton.x.x);
+            let swept = sweep(
+                &lateral,
+                &SVector::zeros(),
+                TangentSet::unknowns(true),
+                None,
+            );
+            solved.stability =
+                stability::of_blocks(solved.stability, crate::solve::verdict(&lateral, &swept));
             if !solved.stability.is_acceptable() {
                 solved.newton.termination = Termination::Unstable;
             }
@@ -188,6 +197,7 @@ mod step_cost_probe {
 
     use super::*;
     use crate::ode::RodOde;
+    use crate::ode::dead_load::DeadLoadRod;
     use crate::rod::{Cable, Guide, Rod, Section, StrainModel};
     use crate::sweep::TangentSet;
     use crate::{CrossSection, GuideMass, Material, Start, Stiffness};
@@ -261,5 +271,205 @@ mod step_cost_probe {
             "{strain_model:?}: {repeat} sweeps of {} steps each, 3D and planar",
             model.plan().total_steps()
         );
+    }
+}
+
+/// The out-of-plane test against the 3D one at the same planar equilibria, and against the
+/// analytic load of lateral-torsional buckling.
+#[cfg(test)]
+mod lateral_stability {
+    use nalgebra::{Matrix3, SVector, Vector3};
+
+    use super::*;
+    use crate::ode::Family;
+    use crate::ode::dead_load::DeadLoadRod;
+    use crate::rod::{Rod, Section, StrainModel};
+    use crate::stability::Stability;
+    use crate::{CrossSection, Material, Stiffness};
+
+    /// A weightless cantilever of `length_m`, one section per stiffness, of equal lengths and
+    /// `steps` steps each.
+    fn rod(
+        stiffness: &[Stiffness<f64>],
+        length_m: f64,
+        steps: u16,
+        strain: StrainModel,
+    ) -> Rod<f64> {
+        let mut rod = Rod::new();
+        rod.gravity_m_s2 = Vector3::zeros();
+        rod.strain_model = strain;
+        let sections = stiffness.len() as f64;
+        for stiffness in stiffness {
+            rod.push_section(Section {
+                length_m: length_m / sections,
+                stiffness: *stiffness,
+                line_density_kg_per_m: 0.01,
+                steps,
+            })
+            .unwrap();
+        }
+        rod
+    }
+
+    /// The planar equilibrium under `load` (not tested for stability), its verdict from the two
+    /// blocks (the in-plane test and the out-of-plane fields), the 3D sweep's verdict there, and how
+    /// far the out-of-plane fields' `H(L)` and `M(L)` are from the 3D fields' seeded along `p` and
+    /// `e3` (relative to the 3D block's size; the 3D fields' part in the plane counts as error).
+    fn verdicts(
+        model: &Model<f64>,
+        load: &TipLoad<f64>,
+    ) -> Option<(Stability<f64>, Stability<f64>, f64)> {
+        let planar = PlanarModel::new(model, load)?;
+        let settings = ShootingSettings {
+            check_stability: false,
+            ..ShootingSettings::default()
+        };
+        let answer = planar.solve(load, &settings).ok()?;
+        if !answer.report.termination.is_success() {
+            return None;
+        }
+        let ode = planar.ode(load);
+        let k0 = answer.base_strain_per_m.dot(&ode.local_normal());
+        let in_plane = sweep(
+            &ode,
+            &SVector::<f64, 1>::new(k0),
+            TangentSet::unknowns(true),
+            None,
+        );
+        let lateral = LateralRod::new(ode, k0);
+        let out = sweep(
+            &lateral,
+            &SVector::zeros(),
+            TangentSet::unknowns(true),
+            None,
+        );
+        let blocks = stability::of_blocks(
+            crate::solve::verdict(&ode, &in_plane),
+            crate::solve::verdict(&lateral, &out),
+        );
+        let full = DeadLoadRod::new(model, load, 1.0);
+        let swept = sweep(
+            &full,
+            &answer.base_strain_per_m,
+            TangentSet::unknowns(true),
+            None,
+        );
+        let n = ode.local_normal();
+        let p = Vector3::new(-n.y, n.x, 0.0);
+        let h3 = Matrix3::from_fn(|i, j| swept.d_rotation(Family::Unknown, j)[i]);
+        let m3 = swept.jacobian();
+        let mut error: f64 = 0.0;
+        for (j, seed) in [p, Vector3::z()].iter().enumerate() {
+            let h = out.d_rotation(Family::Unknown, j);
+            let m = out.jacobian().column(j).into_owned();
+            let m = p * m[0] + Vector3::z() * m[1];
+            error = error
+                .max((h3 * seed - h).norm() / h3.norm())
+                .max((m3 * seed - m).norm() / m3.norm());
+        }
+        Some((blocks, crate::solve::verdict(&full, &swept), error))
+    }
+
+    #[test]
+    fn the_two_blocks_give_the_3d_verdict() {
+        // The exp-2 rod (isotropic), a strip 30 times stiffer in the plane than across it, and the
+        // strip with a softer distal half (the fields cross a change of section), in either strain
+        // model; tip forces in the plane from pulling along the rod to pushing back along it
+        // beyond buckling, across it, and gravity. Every planar equilibrium found gets the same
+        // verdict both ways, a conjugate point within a step of the 3D one.
+        let material = Material::isotropic(62.7e9, 0.3).unwrap();
+        let wire =
+            Stiffness::from_material(&material, &CrossSection::solid_circle(1.56e-3).unwrap())
+                .unwrap();
+        let strip =
+            Stiffness::new(Vector3::new(3.0, 0.1, 0.08), Vector3::new(1e5, 1e5, 1e6)).unwrap();
+        let (mut compared, mut unstable, mut worst) = (0, 0, 0.0_f64);
+        let soft =
+            Stiffness::new(Vector3::new(1.0, 0.05, 0.03), Vector3::new(5e4, 5e4, 5e5)).unwrap();
+        for (stiffness, length_m) in [
+            (&[wire][..], 0.39),
+            (&[strip][..], 1.0),
+            (&[strip, soft][..], 1.0),
+        ] {
+            for strain in [StrainModel::Cosserat, StrainModel::Kirchhoff] {
+                for gravity in [false, true] {
+                    let mut rod = rod(stiffness, length_m, 40, strain);
+                    if gravity {
+                        // Along the local y axis: in the plane normal to the local x axis.
+                        rod.gravity_m_s2 = rod.base_orientation.column(1) * -9.81;
+                        for section in &mut rod.sections {
+                            section.line_density_kg_per_m = 0.013;
+                        }
+                    }
+                    let model = Model::<f64>::new(rod).unwrap();
+                    let (t, y) = (
+                        model.rod().base_orientation.column(2).into_owned(),
+                        model.rod().base_orientation.column(1).into_owned(),
+                    );
+                    let scale = stiffness[0].bending_torsion_nm2.y / (length_m * length_m);
+                    for deg in (0..360).step_by(15) {
+                        let angle = f64::from(deg).to_radians();
+                        for times in [0.3, 1.0, 2.0, 3.5, 6.0, 12.0] {
+                            let force = (t * angle.cos() + y * angle.sin()) * (times * scale);
+                            let load = TipLoad::force(force);
+                            let Some((blocks, full, error)) = verdicts(&model, &load) else {
+                                continue;
+                            };
+                            compared += 1;
+                            worst = worst.max(error);
+                            let step = length_m / (40.0 * stiffness.len() as f64);
+                            match (blocks, full) {
+                                (Stability::ConjugatePoint(a), Stability::ConjugatePoint(b)) => {
+                                    assert!(
+                                        (a - b).abs() <= step * 1.01,
+                                        "{deg} deg x{times}: {a} vs {b}"
+                                    );
+                                }
+                                _ => assert_eq!(
+                                    blocks.is_acceptable(),
+                                    full.is_acceptable(),
+                                    "{deg} deg x{times}: {blocks:?} vs {full:?}"
+                                ),
+                            }
+                            unstable += usize::from(!full.is_acceptable());
+                        }
+                    }
+                }
+            }
+        }
+        println!("{compared} equilibria compared, {unstable} unstable, fields within {worst:e}");
+        // The same discrete fields: the 3D sweep's RK4 stages restricted to the block.
+        assert!(
+            worst < 1e-12,
+            "out-of-plane fields {worst:e} from the 3D ones"
+        );
+        assert!(
+            compared > 500 && unstable > 50,
+            "{compared} compared, {unstable} unstable"
+        );
+    }
+
+    #[test]
+    fn a_strip_buckles_sideways_at_prandtls_load() {
+        // A cantilever strip bent in its stiff plane by a tip force across it (at the centroid)
+        // buckles out of the plane with twist at P = 4.013 sqrt(E I_y G J) / L^2 (Prandtl; Timoshenko
+        // and Gere, Theory of Elastic Stability, 6.3), here E I_y = G J = 1 N m^2, L = 1 m, and
+        // the stiff plane 1000 times stiffer, so its bending before buckling changes the load by
+        // about 0.1 %. The in-plane test sees nothing; the out-of-plane fields must, and the solve's
+        // answer beyond it is no answer.
+        let strip =
+            Stiffness::new(Vector3::new(1000.0, 1.0, 1.0), Vector3::new(1e7, 1e7, 1e8)).unwrap();
+        let model = Model::<f64>::new(rod(&[strip], 1.0, 40, StrainModel::Kirchhoff)).unwrap();
+        let across = model.rod().base_orientation.column(1).into_owned();
+        let critical_n = 4.0126;
+        for (times, stable) in [(0.97, true), (1.03, false)] {
+            let load = TipLoad::force(across * (critical_n * times));
+            let (blocks, full, _) = verdicts(&model, &load).expect("a planar equilibrium");
+            assert_eq!(blocks.is_acceptable(), stable, "x{times}: {blocks:?}");
+            assert_eq!(full.is_acceptable(), stable, "x{times}: 3D {full:?}");
+            let planar = PlanarModel::new(&model, &load).unwrap();
+            let answer = planar.solve(&load, &ShootingSettings::default()).unwrap();
+            assert_eq!(answer.report.termination.is_success(), stable, "x{times}");
+        }
     }
 }

@@ -128,6 +128,22 @@ impl<T> Stability<T> {
     }
 }
 
+/// The verdict on Jacobi fields that split into two blocks (a planar equilibrium's in-plane and
+/// out-of-plane fields, `ode/planar_lateral.rs`) from each block's: stable when both are, the first
+/// conjugate point of either, else an unstable free end in either. The test is only as complete as
+/// its parts: `NonConservative` or `Unchecked` in either is the whole's.
+pub(crate) fn of_blocks<T: Scalar>(a: Stability<T>, b: Stability<T>) -> Stability<T> {
+    use Stability::*;
+    match (a, b) {
+        (NonConservative, _) | (_, NonConservative) => NonConservative,
+        (Unchecked, _) | (_, Unchecked) => Unchecked,
+        (ConjugatePoint(s), ConjugatePoint(t)) => ConjugatePoint(if t < s { t } else { s }),
+        (ConjugatePoint(s), _) | (_, ConjugatePoint(s)) => ConjugatePoint(s),
+        (FreeEndUnstable, _) | (_, FreeEndUnstable) => FreeEndUnstable,
+        (Stable, Stable) => Stable,
+    }
+}
+
 /// The verdict from the sweep's conjugate-point track, the shooting Jacobian `M(L) = de/dx0` and
 /// `H(L) = d theta(L)/dx0` (both body frame). `conservative` is false when any moment acts.
 ///

@@ -340,8 +340,8 @@ fn planar(study: &Study) -> Option<String> {
     Some(format!(
         "**Planar reduction** (in-plane scenes): at equal steps an error {} the 3D model's in {} \
          of its time per cold solve. {work} ({} sweeps per solve against {} on the same scenes, the \
-         last one the 3D stability test): its steps are cheaper, five states and one tangent against \
-         sixteen states and three tangents.",
+         last one the stability test out of the plane): its steps are cheaper, five states and one \
+         tangent (two in the last sweep) against sixteen states and three tangents.",
         error.ratio(),
         time.ratio(),
         sig(sp),

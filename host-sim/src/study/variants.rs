@@ -175,8 +175,8 @@ impl Family {
 }
 
 /// The families studied for each arithmetic: the three frames of the full model, then the
-/// reductions with the quaternion frame (the planar reduction integrates no frame; its final 3D
-/// stability sweep uses the quaternion).
+/// reductions with the quaternion frame (the planar reduction integrates no frame but the
+/// quaternion's part in the plane).
 pub fn families(arithmetics: &[Arithmetic], planar_allowed: bool) -> Vec<Family> {
     let mut out = Vec::new();
     for &arithmetic in arithmetics {

@@ -13,6 +13,7 @@
 //! | 3D Cosserat/Kirchhoff rod, internal force in closed form (dead loads: the fast path) | `u(0)`, 3 | `dead_load.rs` |
 //! | 3D rod with the internal force and moment as states (loads that read the shape) | `n(0)`, `m(0)`, 6 | `force_state.rs` |
 //! | the planar reduction (in-plane dead loads) | `k(0)`, 1 | `planar.rs` |
+//! | a planar equilibrium's Jacobi fields out of its plane (its stability test there) | `du(0)` across the plane, 2 | `planar_lateral.rs` |
 //! | tendons through discrete guides: chord forces, an implicit jump per guide | `n(0)`, `m(0)`, 6 | `tendon.rs` |
 //! | tendons routed continuously (Rucker-Webster): composite force and moment as states | `N(0)`, `M(0)`, 6 | `tendon_continuous.rs` |
 
@@ -20,6 +21,7 @@ pub(crate) mod dead_load;
 pub(crate) mod force_state;
 pub(crate) mod guess;
 pub(crate) mod planar;
+pub(crate) mod planar_lateral;
 pub(crate) mod tendon;
 pub(crate) mod tendon_continuous;
 

@@ -97,6 +97,11 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarRod<'a, T, A, NODE
         self.local_normal
     }
 
+    /// The model.
+    pub(super) fn model(&self) -> &'a Model<T, A, NODES> {
+        self.model
+    }
+
     fn project(&self, v: &Vector3<T>) -> Vector2<T> {
         Vector2::new(v.dot(&self.plane.e1), v.dot(&self.plane.e2))
     }
@@ -138,7 +143,7 @@ pub(crate) struct State<T: Scalar> {
     r: Vector2<T>,
     r_lo: Vector2<T>,
     q: Vector2<T>,
-    k: T,
+    pub(super) k: T,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -194,10 +199,18 @@ impl<T: Scalar> Linear<T> for Tangent<T> {
 /// What a tangent's rate needs from one stage.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Stage<T: Scalar> {
-    t: Vector2<T>,
-    n: Vector2<T>,
-    vt: T,
-    vn: T,
+    pub(super) t: Vector2<T>,
+    pub(super) n: Vector2<T>,
+    pub(super) vt: T,
+    pub(super) vn: T,
+}
+
+impl<T: Scalar> Stage<T> {
+    /// The in-plane normal of the direction, `t_perp`.
+    #[inline]
+    pub(super) fn t_perp(&self) -> Vector2<T> {
+        perp(&self.t)
+    }
 }
 
 /// One interval's coefficients: bending, shear and axial compliance, and the force field
@@ -211,6 +224,14 @@ pub(crate) struct Field<T: Scalar> {
     g_lambda: Vector2<T>,
     s1: T,
     kirchhoff: bool,
+}
+
+impl<T: Scalar> Field<T> {
+    /// Whether the rod is Kirchhoff's (inextensible and unshearable).
+    #[inline]
+    pub(super) fn kirchhoff(&self) -> bool {
+        self.kirchhoff
+    }
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
