@@ -21,7 +21,8 @@ Exit status of solve and estimate:
   0  a converged answer (stable, where stability is checked). For estimate, whatever the
      determination (Determined, Weak, Undetermined, Ambiguous: another load explains the
      lengths as well, Unverified: the search for other loads ran out of budget): the
-     determination and the uncertainty say how good it is.
+     determination and the uncertainty say how good it is; Undetermined, Ambiguous and
+     Unverified also warn that the tip force printed is not the only fit, or may not be.
   1  invalid input: a bad scene file or value (a negative cable length, too many guides, ...),
      or an I/O error
   2  command-line usage error

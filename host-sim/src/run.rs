@@ -223,6 +223,28 @@ impl Status {
         }
     }
 
+    /// The status of a passive estimate (tip load from cable lengths): [`Status::new`] with the
+    /// estimate's verdict, and a warning when the printed numbers may not be the only load that
+    /// explains the lengths, or are one of many ([`doubt_of`]).
+    pub fn estimate(
+        report: &SolveReport<f64>,
+        check_stability: bool,
+        determination: Determination,
+    ) -> Self {
+        let mut status = Self::new(report, check_stability, Some(determination));
+        status.warn_doubt(determination);
+        status
+    }
+
+    /// The warning of [`doubt_of`] on an answer.
+    fn warn_doubt(&mut self, determination: Determination) {
+        if self.verdict == Verdict::Answer
+            && let Some(doubt) = doubt_of(determination)
+        {
+            self.warnings.push(doubt.to_string());
+        }
+    }
+
     /// The status of a tendon solve: that of its last forward solve (`report`), and for displacement
     /// control the outcome of the search for the tensions (`displacement`: its termination), which
     /// must also have converged. Model-core has no energy test of stability with tendons yet
@@ -284,6 +306,10 @@ impl Status {
             }
         }
         status.warn_tendon_stability(report, check_stability);
+        // An unobservable tip force is printed as null and has its own warning below.
+        if determination != Determination::Undetermined {
+            status.warn_doubt(determination);
+        }
         if answer && !force_observable {
             status.warnings.push(format!(
                 "the tip force is not observable from the spool displacements alone \
@@ -1008,7 +1034,7 @@ impl WithModel for Estimate<'_> {
         )
         .map_err(|e| SceneError::new("--cables", e.to_string()))?;
         let q = &est.quality;
-        let status = Status::new(&est.report, settings.check_stability, Some(q.determination));
+        let status = Status::estimate(&est.report, settings.check_stability, q.determination);
         let numbers = if status.verdict.has_numbers() {
             let s = self.scene.output_points_m(model.length_m())?;
             let points = dead_load_shape(model, &est.base_strain_per_m, &est.load, &s)?;
@@ -1185,6 +1211,29 @@ fn csv_field(text: &str) -> String {
     }
 }
 
+/// What an estimate's verdict leaves out of its printed numbers, as a warning, when it does: a tip
+/// force the cables do not determine, or one that may not be the only load explaining them (its
+/// standard deviations are this answer's alone). `Determined` and `Weak` say it in their deviations.
+fn doubt_of(determination: Determination) -> Option<&'static str> {
+    match determination {
+        Determination::Undetermined => Some(
+            "the cables do not determine the load (determination Undetermined): the tip force \
+             printed is one of many that explain the lengths",
+        ),
+        Determination::Ambiguous => Some(
+            "another load within the search's reach explains the lengths as well (determination \
+             Ambiguous): the tip force printed is one of the answers, and its standard deviations \
+             do not cover the other",
+        ),
+        Determination::Unverified => Some(
+            "the search for other loads that explain the lengths ran out of its budget \
+             (determination Unverified): another answer was not ruled out, and the standard \
+             deviations printed are this answer's alone",
+        ),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1200,6 +1249,32 @@ mod tests {
             stability,
             phase_per_step_rad: 0.1,
         }
+    }
+
+    #[test]
+    fn an_estimate_that_may_not_be_the_only_answer_warns() {
+        let converged = report(Termination::Converged, Stability::Stable);
+        for (determination, warned) in [
+            (Determination::Determined, false),
+            (Determination::Weak, false),
+            (Determination::Undetermined, true),
+            (Determination::Ambiguous, true),
+            (Determination::Unverified, true),
+        ] {
+            let status = Status::estimate(&converged, true, determination);
+            assert_eq!(status.verdict, Verdict::Answer);
+            let named = format!("determination {determination:?})");
+            assert_eq!(
+                status.warnings.iter().any(|w| w.contains(&named)),
+                warned,
+                "{determination:?}: {:?}",
+                status.warnings
+            );
+        }
+        // No answer: nothing printed, nothing to warn about.
+        let stalled = report(Termination::Stalled, Stability::Unchecked);
+        let status = Status::estimate(&stalled, true, Determination::Ambiguous);
+        assert!(status.warnings.is_empty(), "{:?}", status.warnings);
     }
 
     #[test]

@@ -852,6 +852,14 @@ fn an_undetermined_estimate_exits_0_and_says_so() {
     let status = json_of(&out)["status"].clone();
     assert_eq!(status["verdict"], "answer");
     assert_eq!(status["determination"], "Undetermined");
+    // The printed force is one of many that fit: said in the status and on standard error.
+    assert!(
+        status["warnings"][0]
+            .as_str()
+            .is_some_and(|w| w.contains("do not determine the load")),
+        "{status}"
+    );
+    assert!(stderr(&out).contains("warning: the cables do not determine the load"));
 
     let out = host_sim(&["estimate", &single, "--cables", &cables]);
     assert_eq!(code(&out), 0);
