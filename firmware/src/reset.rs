@@ -4,9 +4,14 @@
 //! The sampler takes every cable to start at home, where the steppers' counts start
 //! ([`crate::sampler`]): true after a power-up at home, the operator's procedure. After any other
 //! reset the motors may have left home: the firmware's own reset after a fault (panic, HardFault:
-//! `target::board`'s `stop`), a watchdog, the reset pin, a brownout. A cable then left a whole
-//! number of sensor turns from home reads like home, so the board's sampler does not trust home
-//! after such a reset ([`crate::sampler::Sampler::distrust_home`]).
+//! `target::board`'s `stop`), a watchdog, the reset pin (a debug probe's reset after flashing
+//! too), a brownout. A cable then left a whole number of sensor turns from home reads like home,
+//! so the board's sampler does not trust home after such a reset
+//! ([`crate::sampler::Sampler::distrust_home`]).
+//!
+//! The brownout flag comes alone only when the brownout detector is on (the option bytes' BOR
+//! level; the chip ships with it off, and this firmware does not set it): with it off, a supply
+//! dip deep enough to reset the MCU is a power-down and reads as a power-on, like any power loss.
 //!
 //! The flags accumulate until cleared; the board reads them once at start-up and clears them, so the
 //! next start sees only its own cause.

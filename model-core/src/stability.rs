@@ -129,17 +129,19 @@ impl<T> Stability<T> {
 }
 
 /// The verdict on Jacobi fields that split into two blocks (a planar equilibrium's in-plane and
-/// out-of-plane fields, `ode/planar_lateral.rs`) from each block's: stable when both are, the first
-/// conjugate point of either, else an unstable free end in either. The test is only as complete as
-/// its parts: `NonConservative` or `Unchecked` in either is the whole's.
+/// out-of-plane fields, `ode/planar_lateral.rs`) from each block's: the first conjugate point of
+/// either, else an unstable free end in either, else stable when both are. Loads that are not
+/// conservative void the test (`NonConservative` in either); a block that found its equilibrium
+/// unstable says so whatever the other's; otherwise the test is only as complete as its parts
+/// (`Unchecked` in either).
 pub(crate) fn of_blocks<T: Scalar>(a: Stability<T>, b: Stability<T>) -> Stability<T> {
     use Stability::*;
     match (a, b) {
         (NonConservative, _) | (_, NonConservative) => NonConservative,
-        (Unchecked, _) | (_, Unchecked) => Unchecked,
         (ConjugatePoint(s), ConjugatePoint(t)) => ConjugatePoint(if t < s { t } else { s }),
         (ConjugatePoint(s), _) | (_, ConjugatePoint(s)) => ConjugatePoint(s),
         (FreeEndUnstable, _) | (_, FreeEndUnstable) => FreeEndUnstable,
+        (Unchecked, _) | (_, Unchecked) => Unchecked,
         (Stable, Stable) => Stable,
     }
 }

@@ -102,6 +102,18 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> PlanarRod<'a, T, A, NODE
         self.model
     }
 
+    /// The in-plane internal force at `s` on an interval with coefficients `f`, and the direction
+    /// of state `y`.
+    #[inline]
+    pub(super) fn force_and_direction(
+        &self,
+        f: &Field<T>,
+        s: T,
+        y: &State<T>,
+    ) -> (Vector2<T>, Vector2<T>) {
+        (f.n_end + f.g_lambda * (f.s1 - s), direction(&y.q))
+    }
+
     fn project(&self, v: &Vector3<T>) -> Vector2<T> {
         Vector2::new(v.dot(&self.plane.e1), v.dot(&self.plane.e2))
     }
@@ -313,8 +325,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>
 
     #[inline]
     fn bending_load(&self, f: &Field<T>, s: T, y: &State<T>) -> T {
-        let n = f.n_end + f.g_lambda * (f.s1 - s);
-        super::bending_load(&n, &direction(&y.q), T::one() / (f.ei * f.ei))
+        let (n, t) = self.force_and_direction(f, s, y);
+        super::bending_load(&n, &t, T::one() / (f.ei * f.ei))
     }
 
     fn field(&self, interval: &Interval<T>) -> Option<Field<T>> {

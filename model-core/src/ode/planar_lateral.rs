@@ -102,8 +102,8 @@ pub(crate) struct Stage<T: Scalar> {
 }
 
 /// One interval's coefficients: the planar ones, and the stiffness about the normal, about `p` and
-/// in torsion, the shear compliance along the normal, and the softest stiffness (the watch's
-/// level).
+/// in torsion, the shear compliance along the normal, the softest stiffness (the watch's level),
+/// and `(1 / E I)^2` about the softer bending axis (the grid's resolution, as the 3D sweep has it).
 #[derive(Debug)]
 pub(crate) struct Field<T: Scalar> {
     planar: PlanarField<T>,
@@ -112,6 +112,7 @@ pub(crate) struct Field<T: Scalar> {
     c_t: T,
     shear_n_inv: T,
     c_min: T,
+    soft_compliance_squared: T,
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 2>
@@ -195,18 +196,22 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 2>
             c_t: c.z,
             shear_n_inv: T::one() / (d.x * n.x * n.x + d.y * n.y * n.y),
             c_min: c.min(),
+            soft_compliance_squared: T::one() / (c.x.min(c.y) * c.x.min(c.y)),
             planar,
         })
     }
 
+    /// The planar force against the softer bending axis: a bend out of the plane may be softer
+    /// than the one in it, and the grid must resolve it as the 3D sweep's does.
     #[inline]
     fn bending_load(&self, f: &Field<T>, s: T, y: &State<T>) -> T {
-        self.planar.bending_load(&f.planar, s, y)
+        let (n, t) = self.planar.force_and_direction(&f.planar, s, y);
+        super::bending_load(&n, &t, f.soft_compliance_squared)
     }
 
     #[inline]
     fn stage_bending_load(&self, f: &Field<T>, stage: &Stage<T>) -> T {
-        self.planar.stage_bending_load(&f.planar, &stage.planar)
+        super::bending_load(&stage.planar.n, &stage.planar.t, f.soft_compliance_squared)
     }
 
     #[inline]
@@ -260,7 +265,8 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 2>
     }
 
     /// The state's jump is the planar one; the moment `C du` is continuous across a change of
-    /// section (point moments make the loads non-conservative: the verdict then is that).
+    /// section. (A point moment would make it jump with the turn; it also makes the loads
+    /// non-conservative, and the verdict is then that, whatever the fields.)
     fn node(
         &self,
         node: &Node<T>,
