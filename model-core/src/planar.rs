@@ -32,7 +32,8 @@ const PLANE_TOLERANCE: f64 = 1e-9;
 
 /// The plane a rod and a tip load stay in, if they do: every force (gravity, point loads, tip)
 /// perpendicular to one normal that is perpendicular to the base tangent, every moment along it, and
-/// the section's bending stiffness about that normal a principal one. `None` otherwise.
+/// that normal a principal axis of every section's bending and shear (unless the section bends, and
+/// shears, alike about both axes). `None` otherwise.
 pub fn plane_of<T: Scalar, A: Attitude<T>, const NODES: usize>(
     model: &Model<T, A, NODES>,
     load: &TipLoad<T>,
