@@ -244,6 +244,12 @@ impl<T: Scalar> Field<T> {
     pub(super) fn kirchhoff(&self) -> bool {
         self.kirchhoff
     }
+
+    /// The bending stiffness about the plane's normal, N m^2.
+    #[inline]
+    pub(super) fn ei(&self) -> T {
+        self.ei
+    }
 }
 
 impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 1>

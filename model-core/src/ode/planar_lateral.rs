@@ -181,22 +181,18 @@ impl<'a, T: Scalar, A: Attitude<T>, const NODES: usize> RodOde<T, 2>
 
     fn field(&self, interval: &Interval<T>) -> Option<Field<T>> {
         let planar = self.planar.field(interval)?;
-        let section = self
-            .planar
-            .model()
-            .rod()
-            .sections
-            .get(usize::from(interval.section))?;
+        // The section's stiffness and compliances as the 3D sweep reads them.
+        let comp = self.planar.model().compliance(interval.section)?;
         let (n, p) = (self.planar.local_normal(), self.local_p);
-        let c = section.stiffness.bending_torsion_nm2;
-        let d = section.stiffness.shear_axial_n;
+        let (c, d_inv) = (comp.c, comp.d_inv);
+        let soft = comp.max_bending_compliance();
         Some(Field {
-            c_n: c.x * n.x * n.x + c.y * n.y * n.y,
+            c_n: planar.ei(),
             c_p: c.x * p.x * p.x + c.y * p.y * p.y,
             c_t: c.z,
-            shear_n_inv: T::one() / (d.x * n.x * n.x + d.y * n.y * n.y),
+            shear_n_inv: d_inv.x * n.x * n.x + d_inv.y * n.y * n.y,
             c_min: c.min(),
-            soft_compliance_squared: T::one() / (c.x.min(c.y) * c.x.min(c.y)),
+            soft_compliance_squared: soft * soft,
             planar,
         })
     }
