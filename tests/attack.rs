@@ -1,10 +1,10 @@
 //! The estimator attacked as an adversary would: random tip forces over the three-cable bench, from
 //! 0.01 to 100 buckling scales (`E I / L^2`, 0.12 N) in every direction, the cables read through
 //! either encoder (the firmware's 2.397e-7 m per count, the scene file's 7.67e-6 m), estimated
-//! cold in f64 and in f32. The contract: no estimate is `Converged` and `Determined` while more than
-//! five of its reported standard deviations from the truth, in any component of the force or of the
-//! tip. Other verdicts (`Weak`, `Ambiguous`, `Unverified`, a refusal) are allowed: they say the
-//! answer is not to be trusted as determined.
+//! cold in f64 and in f32. The contract: no estimate that the firmware would publish (`Converged`,
+//! and `Determined` or `Weak`) is more than five of its reported standard deviations from the
+//! truth, in any component of the force or of the tip. Other verdicts (`Ambiguous`, `Unverified`,
+//! `Undetermined`, `Inconsistent`, a refusal) are allowed: they say the answer is not to be trusted.
 //!
 //! Loads drawn by proptest's runner from a fixed seed, so a run reproduces: 40 per configuration in
 //! CI; `ATTACK_CASES` and `ATTACK_SEED` run a large attack (`report/attack.md` has one). Each
@@ -28,7 +28,7 @@ const HOST_STEPS: u16 = 40;
 const MCU_STEPS: u16 = 20;
 /// The largest load attacked, in buckling scales.
 const MAX_SCALES: f64 = 100.0;
-/// Most reported standard deviations a determined answer may be from the truth.
+/// Most reported standard deviations a published answer may be from the truth.
 const COVERAGE: f64 = 5.0;
 
 /// The unit vector at `polar` from the rod's axis (`x`, along the unloaded rod) and `azimuth` about it.
@@ -44,8 +44,8 @@ fn direction(cos_polar: f64, azimuth: f64) -> Vector3<f64> {
 /// One attack: the truth at `buckling_scales` times `E I / L^2` along `(cos_polar, azimuth)`,
 /// solved in f64 on the grid of `steps`; its cable lengths read at `resolution_m`; a cold estimate
 /// in `T` on the same grid. Returns the verdict (`None` when the truth is not a stable equilibrium)
-/// and, for a `Converged` + `Determined` estimate beyond [`COVERAGE`] standard deviations, what
-/// breaks the contract.
+/// and, for a published estimate (`Converged`, `Determined` or `Weak`) beyond [`COVERAGE`] standard
+/// deviations, what breaks the contract.
 fn attack<T: Scalar>(
     steps: u16,
     resolution_m: f64,
@@ -95,7 +95,10 @@ fn attack<T: Scalar>(
         est.report.termination, est.quality.determination
     );
     if !(est.report.termination.is_success()
-        && est.quality.determination == Determination::Determined)
+        && matches!(
+            est.quality.determination,
+            Determination::Determined | Determination::Weak
+        ))
     {
         return Some((verdict, None));
     }
@@ -108,8 +111,9 @@ fn attack<T: Scalar>(
         .amax();
     let broken = (force_sigma > COVERAGE || tip_sigma > COVERAGE).then(|| {
         format!(
-            "determined {:.4?} N for the truth {:.4?} N: force {:.1} and tip {:.1} standard \
+            "{:?} {:.4?} N for the truth {:.4?} N: force {:.1} and tip {:.1} standard \
              deviations off (tip {:.2e} m; {:?})",
+            est.quality.determination,
             f64s(&est.params).as_slice(),
             force.as_slice(),
             force_sigma,
@@ -156,7 +160,7 @@ fn campaign<T: Scalar>(name: &str, steps: u16, resolution_m: f64) {
         println!("  | {verdict} | {a} | {b} | {c} | {d} |");
     }
     println!(
-        "  {:>6}  Converged/Determined beyond {COVERAGE} sigma",
+        "  {:>6}  Converged/Determined or Weak beyond {COVERAGE} sigma",
         broken.len()
     );
     assert!(broken.is_empty(), "{name}:\n{}", broken.join("\n"));

@@ -26,7 +26,9 @@ pub enum Determination {
     /// Two or more loads far apart, both within the search's reach
     /// ([`crate::inverse::InverseSettings::scan_reach`]), explain the measurements about as well
     /// (three cables and three force components admit several exact fits): the answer is the one
-    /// the prior prefers, and the data alone cannot tell.
+    /// the prior prefers, and the data alone cannot tell. A `Weak` answer stays `Weak` when its
+    /// deviations already reach the other answer (within three of them in every load parameter and
+    /// tip coordinate).
     Ambiguous,
     /// The search for other answers ran out of its sweep budget
     /// ([`crate::inverse::InverseSettings::max_sweeps`]) before it could rule them out, or never
@@ -35,12 +37,28 @@ pub enum Determination {
 }
 
 impl Determination {
-    /// This verdict, with `Determined` lowered to `to` (the others already say the answer is not
-    /// determined).
+    /// This verdict or `to`, whichever vouches for the answer less (see [`Determination::doubt`]):
+    /// a `Weak` answer where another answer may explain the data as well is `Ambiguous` (or
+    /// `Unverified`): its deviations describe its own valley, not the other answer.
     pub fn at_best(self, to: Self) -> Self {
+        if to.doubt() > self.doubt() { to } else { self }
+    }
+
+    /// How little the verdict vouches for the answer, from `Determined` (0) up:
+    /// - `Weak`: one answer, wide in some direction, and its deviations say how wide;
+    /// - `Unverified`: other answers were not ruled out;
+    /// - `Ambiguous`: another answer, far from this one, explains the data as well;
+    /// - `Undetermined`: some direction is not determined at all (infinite deviation, which
+    ///   covers any other answer along it);
+    /// - `Inconsistent`: no load of the model explains the data.
+    pub fn doubt(self) -> u8 {
         match self {
-            Self::Determined => to,
-            other => other,
+            Self::Determined => 0,
+            Self::Weak => 1,
+            Self::Unverified => 2,
+            Self::Ambiguous => 3,
+            Self::Undetermined => 4,
+            Self::Inconsistent => 5,
         }
     }
 }
@@ -241,4 +259,41 @@ fn deviations<T: Scalar, const P: usize>(
         .component_mul(a)
         .column_sum()
         .map(|v| (v.max(T::zero()) + extra).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Determination::{self, *};
+
+    const ALL: [Determination; 6] = [
+        Determined,
+        Weak,
+        Unverified,
+        Ambiguous,
+        Undetermined,
+        Inconsistent,
+    ];
+
+    #[test]
+    fn a_verdict_is_only_ever_lowered() {
+        for a in ALL {
+            for b in ALL {
+                let lowered = a.at_best(b);
+                assert!(
+                    lowered == a || lowered == b,
+                    "{a:?} at best {b:?}: {lowered:?}"
+                );
+                assert!(lowered.doubt() >= a.doubt().max(b.doubt()));
+                assert_eq!(lowered, b.at_best(a), "{a:?}, {b:?}");
+            }
+        }
+        // A wide answer that another may explain as well says so (it stayed `Weak`, which the
+        // firmware publishes, and lost the doubt along a chain of warm updates).
+        assert_eq!(Weak.at_best(Ambiguous), Ambiguous);
+        assert_eq!(Weak.at_best(Unverified), Unverified);
+        assert_eq!(Ambiguous.at_best(Unverified), Ambiguous);
+        assert_eq!(Undetermined.at_best(Ambiguous), Undetermined);
+        assert_eq!(Inconsistent.at_best(Unverified), Inconsistent);
+        assert_eq!(Determined.at_best(Weak), Weak);
+    }
 }

@@ -86,17 +86,44 @@ pub(super) struct Widen<T, const P: usize> {
 }
 
 /// What the search for other answers found, once its leads are followed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scan {
+#[derive(Clone, Copy, Debug)]
+enum Scan<T, const P: usize> {
     /// No other answer within its reach.
     Unique,
     /// Another answer within the search's reach explains the data about as well.
-    Ambiguous,
+    Ambiguous(Rival<T, P>),
     /// Another answer scores clearly better (data and prior, by more than [`ALTERNATIVE_CHI2`]) and
-    /// replaced the first; `true` when the first explains the data about as well.
-    Better(bool),
+    /// replaced the first; with the first when it explains the data about as well.
+    Better(Option<Rival<T, P>>),
     /// The budget ran out before the search was done.
     Incomplete,
+}
+
+/// Another answer that explains the data about as well as the one returned.
+#[derive(Clone, Copy, Debug)]
+struct Rival<T, const P: usize> {
+    params: SVector<T, P>,
+    tip_m: Vector3<T>,
+}
+
+impl<T: Scalar, const P: usize> Rival<T, P> {
+    /// The rival at `x`, linearised by `lin`.
+    fn at(x: &Point<T, P>, lin: &Linearization<T, P>) -> Self {
+        Self {
+            params: x.p,
+            tip_m: lin.tip_position_m,
+        }
+    }
+
+    /// Within three of `out`'s standard deviations in every parameter and every tip coordinate:
+    /// what the deviations already say the data leave open.
+    fn covered_by(&self, out: &Estimate<T, P>) -> bool {
+        let within = |((a, b), std): ((&T, &T), &T)| (*a - *b).abs() <= T::lit(3.0) * *std;
+        let q = &out.quality;
+        let params = self.params.iter().zip(out.params.iter());
+        let tip = self.tip_m.iter().zip(out.tip_position_m.iter());
+        params.zip(q.param_std.iter()).all(within) && tip.zip(q.tip_std_m.iter()).all(within)
+    }
 }
 
 /// Where the profile along the weakest direction suggests other answers: on each side, the lowest
@@ -616,12 +643,18 @@ where
                 (scan, widen)
             }
         };
+        let mut out = self.finish_widened(x, &lin, termination, work, widen.as_ref());
         let cap = match scan {
-            Scan::Unique | Scan::Better(false) => None,
-            Scan::Ambiguous | Scan::Better(true) => Some(Determination::Ambiguous),
+            Scan::Unique | Scan::Better(None) => None,
+            // A wide answer whose deviations reach the rival already says what the data leave
+            // open; a rival beyond them, or next to a determined answer, makes it ambiguous.
+            Scan::Ambiguous(rival) | Scan::Better(Some(rival)) => {
+                let covered =
+                    out.quality.determination == Determination::Weak && rival.covered_by(&out);
+                (!covered).then_some(Determination::Ambiguous)
+            }
             Scan::Incomplete => Some(Determination::Unverified),
         };
-        let mut out = self.finish_widened(x, &lin, termination, work, widen.as_ref());
         if let Some(cap) = cap {
             out.quality.determination = out.quality.determination.at_best(cap);
         }
@@ -1012,7 +1045,7 @@ where
         starts: &[Option<Point<T, P>>; 4],
         limit: u16,
         work: &mut Work,
-    ) -> Scan {
+    ) -> Scan<T, P> {
         let Some(best_misfit) = self.misfit(lin) else {
             return Scan::Unique;
         };
@@ -1059,14 +1092,15 @@ where
             // The other answer scores clearly better (data and prior): it is returned, and
             // ambiguous if this one is a rival to it.
             let this_fits = best_misfit <= alt_misfit + chi2 && within_reach(&x.p);
+            let this = this_fits.then(|| Rival::at(x, lin));
             (*x, *lin) = (alt, alt_lin);
-            Scan::Better(this_fits)
+            Scan::Better(this)
         } else if alt_merit < best_merit
             || (alt_misfit <= best_misfit + chi2 && within_reach(&alt.p))
         {
             // A rival, or an answer scoring a little better: this one is kept (the one its branch
             // leads to; two equally good fits do not swap on rounding), and not called determined.
-            Scan::Ambiguous
+            Scan::Ambiguous(Rival::at(&alt, &alt_lin))
         } else {
             Scan::Unique
         }
