@@ -9,7 +9,7 @@
 //! 1. no conjugate point on `(0, L]` (`H(s)` never singular), and
 //! 2. the free-end Riccati matrix `W = M(L) H(L)^-1` has a positive definite symmetric part.
 //!
-//! Conjugate points are found on the grid ([`ConjugateTrack`]) two ways. A sign change of `det H`
+//! Conjugate points are found on the grid (`ConjugateTrack`) two ways. A sign change of `det H`
 //! finds an odd number in a step. An even number (two at once: a rod pushed back along itself past
 //! its buckling load bends in and across the plane alike, and near such symmetry two crossings fall
 //! in one step) leaves `det H` positive, so the Riccati matrix `W(s) = M(s) H(s)^-1`, `M = C dU`, is

@@ -10,7 +10,7 @@ use crate::model::Model;
 use crate::{MAX_CABLES, Scalar};
 
 /// The number of load parameters an estimate can have (1 to 3). nalgebra's singular value
-/// decomposition behind [`Quality`] needs a concrete size, so each is listed here.
+/// decomposition behind [`Quality`](super::Quality) needs a concrete size, so each is listed here.
 pub trait ParamCount<T: Scalar, const P: usize> {
     /// Singular values and right singular vectors (columns of `V`) of a `MAX_CABLES x P` matrix,
     /// `None` if the decomposition does not converge.

@@ -14,7 +14,8 @@ use crate::scalar::product;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Determination {
-    /// Every load component's standard deviation is within [`InverseSettings::max_force_std_n`].
+    /// Every load component's standard deviation is within
+    /// [`InverseSettings::max_force_std_n`](super::InverseSettings::max_force_std_n).
     Determined,
     /// Some direction of the load is poorly determined (its standard deviation exceeds the limit).
     Weak,
