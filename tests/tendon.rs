@@ -1082,12 +1082,10 @@ fn tendon_inverse_with_tension_sensing_finds_the_tip_force() {
         let tip =
             (est.solved.equilibrium.tip_position_m - truth_eq.equilibrium.tip_position_m).norm();
         assert!(tip < 3.0 * q.tip_std_m.norm() + 1e-9, "tip {tip:e}");
-        // No datum to spare: weak at best, and unverified where the search for other answers cannot
-        // rule one out (both cases here: unverified outranks weak).
         assert!(
             matches!(
                 q.determination,
-                Determination::Weak | Determination::Unverified
+                Determination::Determined | Determination::Weak
             ),
             "{:?}",
             q.determination

@@ -935,7 +935,8 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
     /// Restarts from tip forces of `scan_reach` buckling scales along each axis, both signs: a fit
     /// as good (within 9 in the sum of squares, three standard deviations) and more than three
     /// posterior standard deviations away makes the answer ambiguous; a clearly better one replaces
-    /// it. A restart that ends unconverged, as good, makes it unverified.
+    /// it. A restart that ends unconverged, as good and as far, makes it unverified (one that stops on
+    /// the answer is no rival).
     fn search(&mut self, best: &mut TendonEstimate<T>) -> Result<(), ModelError> {
         if !matches!(
             best.quality.determination,
@@ -983,12 +984,14 @@ impl<T: Scalar, A: Attitude<T>, const NODES: usize> Problem<'_, T, A, NODES> {
             if cost > best_cost + nine {
                 continue;
             }
-            if !outcome.termination.is_success() {
-                verdict = verdict.at_best(Determination::Unverified);
-                continue;
-            }
+            // A restart that ended on the answer (within three of its deviations) is no rival,
+            // converged or not.
             let apart = self.apart_sigma(&outcome.fit.theta, &answer, best);
             if apart <= T::lit(3.0) {
+                continue;
+            }
+            if !outcome.termination.is_success() {
+                verdict = verdict.at_best(Determination::Unverified);
                 continue;
             }
             if cost + nine < best_cost {
