@@ -8,8 +8,8 @@ use model_core::inverse::{
     LoadBasis, estimate,
 };
 use model_core::{
-    MAX_PHASE_PER_STEP_RAD, Model, Rod, Scalar, ShootingSettings, Stability, Start, Termination,
-    TipLoad,
+    Equilibrium, MAX_PHASE_PER_STEP_RAD, Model, Rod, Scalar, ShootingSettings, Stability, Start,
+    Termination, TipLoad,
 };
 use nalgebra::Vector3;
 
@@ -33,6 +33,17 @@ fn cold_estimate(model: &Model<f64>, cables_m: &[f64], resolution_m: f64) -> Est
     .expect("valid readings")
 }
 
+/// The equilibrium under a tip force `force_n`, solved cold: the truth a reading is taken from.
+fn solved(model: &Model<f64>, force_n: Vector3<f64>) -> Equilibrium<f64> {
+    model
+        .solve(
+            &TipLoad::force(force_n),
+            Start::Cold,
+            &ShootingSettings::default(),
+        )
+        .expect("valid load")
+}
+
 /// The largest of `|estimate - truth| / std` over the components.
 fn sigmas(estimate: &Vector3<f64>, truth: &Vector3<f64>, std: &Vector3<f64>) -> f64 {
     (estimate - truth).component_div(std).amax()
@@ -51,13 +62,7 @@ fn a_small_load_is_not_taken_for_a_large_one() {
         0.385_430_943_207_441_26,
         0.383_360_829_390_448_7,
     ];
-    let truth = model
-        .solve(
-            &TipLoad::force(truth_n),
-            Start::Cold,
-            &ShootingSettings::default(),
-        )
-        .expect("valid load");
+    let truth = solved(&model, truth_n);
     for (solved, given) in truth.cable_lengths_m.iter().zip(cables_m) {
         assert!((solved - given).abs() < 1e-12, "{solved} vs {given}");
     }
@@ -96,13 +101,7 @@ fn readings_long_near_the_buckling_load_keep_their_uncertainty() {
         Vector3::new(0.046, -0.014, -0.014),
         Vector3::new(0.048, -0.002, 0.014),
     ] {
-        let truth = model
-            .solve(
-                &TipLoad::force(pull_n),
-                Start::Cold,
-                &ShootingSettings::default(),
-            )
-            .expect("valid load");
+        let truth = solved(&model, pull_n);
         for long_um in [0.0, 8.0, 9.0, 10.0, 11.0, 12.0] {
             let read: Vec<f64> = truth
                 .cable_lengths_m
@@ -261,13 +260,7 @@ fn a_wide_answer_that_another_may_explain_as_well_is_not_published_as_weak() {
     let truth_model = bench::<f64>(20);
     let model = bench::<f32>(20);
     let truth_n = Vector3::new(2.3690, 0.1973, -0.2793);
-    let truth = truth_model
-        .solve(
-            &TipLoad::force(truth_n),
-            Start::Cold,
-            &ShootingSettings::default(),
-        )
-        .expect("valid load");
+    let truth = solved(&truth_model, truth_n);
     let read: Vec<f32> = truth
         .cable_lengths_m
         .iter()
